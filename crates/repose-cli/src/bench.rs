@@ -1,0 +1,195 @@
+//! `repose bench`: particle-steps per second of the fill-and-release scene,
+//! single thread, settled and flowing, for each integrator, with the time
+//! of each stage. The scenes and step counts match the LAMMPS peer runs in
+//! `../shared/peers` (dt = 1e-5 s, N = 25·W·H), so the two can be compared
+//! side by side; `--lammps FILE` reads that run's CSV and prints the ratio.
+
+use anyhow::Context;
+use repose_physics::bench::throughput;
+use repose_physics::integrate::Scheme;
+use repose_physics::Scene;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Box sizes W = H to measure.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![4.0, 8.0])]
+    sizes: Vec<f64>,
+    /// Integrators to measure.
+    #[arg(long, value_delimiter = ',', default_values = ["verlet", "gear5"])]
+    integrators: Vec<String>,
+    /// Time step, s (LAMMPS peer runs use 1e-5).
+    #[arg(long, default_value_t = 1e-5)]
+    dt: f64,
+    /// Scale the step counts (1 = the LAMMPS runs' counts).
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Extra scene overrides, e.g. --set contact.shear_spring=truncated.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// CSV written by the LAMMPS peer benchmark (throughput_lammps.csv).
+    #[arg(long)]
+    lammps: Option<PathBuf>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Step counts of the LAMMPS peer runs (settled, flow) for a box size.
+fn steps_for(size: f64) -> (u64, u64) {
+    if size <= 4.0 {
+        (50_000, 20_000)
+    } else {
+        (20_000, 20_000)
+    }
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    let lammps = match &args.lammps {
+        Some(p) => read_lammps(p)?,
+        None => HashMap::new(),
+    };
+    let mut rows = Vec::new();
+    for &size in &args.sizes {
+        for integrator in &args.integrators {
+            let scheme: Scheme =
+                serde_json::from_value(serde_json::Value::String(integrator.clone()))
+                    .with_context(|| {
+                        format!("unknown integrator `{integrator}` (gear5 or verlet)")
+                    })?;
+            let mut overrides = vec![
+                format!("box.width={size}"),
+                format!("box.height={size}"),
+                format!("numerics.dt={}", args.dt),
+                format!("numerics.integrator=\"{}\"", scheme.name()),
+            ];
+            overrides.extend(args.set.iter().cloned());
+            let scene = match Scene::from_toml("protocol = \"fill_release\"\nseed = 1", &overrides)
+            {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return Ok(ExitCode::from(2));
+                }
+            };
+            let (settled, flow) = steps_for(size);
+            let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
+            eprintln!("measuring W = H = {size}, {} ...", scheme.name());
+            let phases = throughput(&scene, scale(settled), scale(flow))?;
+            for p in phases {
+                rows.push((size, scheme.name(), p));
+            }
+        }
+    }
+
+    if args.json {
+        let out: Vec<_> = rows
+            .iter()
+            .map(|(size, scheme, p)| serde_json::json!({ "size": size, "integrator": scheme, "result": p }))
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+
+    println!(
+        "{:<8} {:<7} {:<8} {:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
+        "scene",
+        "scheme",
+        "phase",
+        "grains",
+        "steps",
+        "Mpsteps/s",
+        "neigh",
+        "contact",
+        "walls",
+        "integr",
+        "LAMMPS",
+        "ratio"
+    );
+    println!("{:<53}   {:^31}", "", "ns per particle-step, by stage");
+    for (size, scheme, p) in &rows {
+        let c = &p.counters;
+        let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
+        let key = (format!("{size:.0}"), p.phase.to_string());
+        let (peer, ratio) = match lammps.get(&key) {
+            Some(v) => (
+                format!("{:.2}", v / 1e6),
+                format!("{:.2}×", p.particle_steps_per_second / v),
+            ),
+            None => ("-".into(), "-".into()),
+        };
+        println!(
+            "{:<8} {:<7} {:<8} {:>11} {:>7} {:>10.2}   {:>7.1} {:>7.1} {:>7.1} {:>7.1}  {:>9} {:>7}",
+            format!("W=H={size}"),
+            scheme,
+            p.phase,
+            format!("{}→{}", p.grains_start, p.grains_end),
+            p.steps,
+            p.particle_steps_per_second / 1e6,
+            per(c.neighbours),
+            per(c.contacts),
+            per(c.walls),
+            per(c.integrate),
+            peer,
+            ratio
+        );
+    }
+    let pairs: Vec<(f64, &str)> = rows
+        .iter()
+        .filter(|(_, s, _)| *s == "gear5")
+        .map(|(size, _, p)| (*size, p.phase))
+        .collect();
+    for (size, phase) in pairs {
+        let find = |scheme: &str| {
+            rows.iter()
+                .find(|(s, sc, p)| *s == size && *sc == scheme && p.phase == phase)
+                .map(|(_, _, p)| p.particle_steps_per_second)
+        };
+        if let (Some(g), Some(v)) = (find("gear5"), find("verlet")) {
+            println!(
+                "W=H={size} {phase}: Gear-5 costs {:.2}× Verlet per particle-step",
+                v / g
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Median particle-steps/s (wall time of the whole process) per (size, phase)
+/// from the LAMMPS peer CSV.
+fn read_lammps(path: &PathBuf) -> anyhow::Result<HashMap<(String, String), f64>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let (Some(w), Some(ph), Some(v)) = (col("W"), col("phase"), col("psteps_per_s_real")) else {
+        anyhow::bail!(
+            "{} lacks the W, phase and psteps_per_s_real columns",
+            path.display()
+        );
+    };
+    let mut groups: HashMap<(String, String), Vec<f64>> = HashMap::new();
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        if let (Some(w), Some(ph), Some(v)) = (
+            f.get(w),
+            f.get(ph),
+            f.get(v).and_then(|x| x.parse::<f64>().ok()),
+        ) {
+            groups
+                .entry((w.to_string(), ph.to_string()))
+                .or_default()
+                .push(v);
+        }
+    }
+    Ok(groups
+        .into_iter()
+        .map(|(k, mut v)| {
+            v.sort_by(f64::total_cmp);
+            (k, v[v.len() / 2])
+        })
+        .collect())
+}

@@ -1,0 +1,240 @@
+//! `repose`: run granular-pile scenes and benchmark the engine.
+//!
+//! ```text
+//! repose run examples/fill_release.toml
+//! repose run examples/tilt.toml --set contact.mu=0.3 --json
+//! repose run examples/fill_release.toml --snapshot pile.svg --trace ke.csv
+//! repose bench
+//! ```
+
+mod bench;
+mod output;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use repose_physics::report::Phase;
+use repose_physics::{Observer, Progress, RunReport, Scene};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "repose",
+    version,
+    about = "Angle-of-repose simulations of granular piles (Lee & Herrmann 1993)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run one sample of a scene and print what it measured.
+    Run(RunArgs),
+    /// Measure engine throughput (particle-steps per second, single thread).
+    Bench(bench::BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Override a scene value, e.g. --set contact.mu=0.3 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Print one JSON document instead of the summary.
+    #[arg(long)]
+    json: bool,
+    /// Include the final state of every grain in the JSON output.
+    #[arg(long)]
+    state: bool,
+    /// Draw the final pile with force chains to this SVG file.
+    #[arg(long, value_name = "FILE.svg")]
+    snapshot: Option<PathBuf>,
+    /// Write kinetic energy per grain against iteration to this CSV file.
+    #[arg(long, value_name = "FILE.csv")]
+    trace: Option<PathBuf>,
+    /// Write the final grains as a legacy VTK file (ParaView).
+    #[arg(long, value_name = "FILE.vtk")]
+    vtk: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run(args) => run(args),
+        Command::Bench(args) => bench::run(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Progress bar over simulated time, shown on a terminal only.
+struct Bar {
+    bar: Option<ProgressBar>,
+    phase: Option<Phase>,
+}
+
+impl Bar {
+    fn new(enabled: bool) -> Self {
+        let bar = enabled.then(|| {
+            let b = ProgressBar::new_spinner();
+            b.set_style(
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg}")
+                    .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+            );
+            b
+        });
+        Bar { bar, phase: None }
+    }
+}
+
+impl Observer for Bar {
+    fn progress(&mut self, u: &Progress) -> bool {
+        if let Some(bar) = &self.bar {
+            if self.phase != Some(u.phase) {
+                self.phase = Some(u.phase);
+            }
+            bar.set_message(format!(
+                "{:<5} t = {:7.3} s  step {:>9}  grains {:>5}  KE/grain {:9.3e} erg  v_max {:8.3} cm/s",
+                u.phase.name(),
+                u.time,
+                u.iteration,
+                u.grains,
+                u.kinetic_energy,
+                u.max_speed
+            ));
+            bar.tick();
+        }
+        true
+    }
+}
+
+fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
+    let text = std::fs::read_to_string(&args.scene)
+        .with_context(|| format!("cannot read scene file {}", args.scene.display()))?;
+    let scene = match Scene::from_toml(&text, &args.set) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: invalid scene {}", args.scene.display());
+            for f in &e.errors {
+                eprintln!("  {}: {}", f.field, f.message);
+            }
+            return Ok(ExitCode::from(2));
+        }
+    };
+    let mut bar = Bar::new(!args.quiet && std::io::stderr().is_terminal());
+    let mut report = repose_physics::run(&scene, &mut bar)?;
+    if let Some(b) = &bar.bar {
+        b.finish_and_clear();
+    }
+
+    if let Some(path) = &args.snapshot {
+        std::fs::write(path, output::snapshot_svg(&report))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = &args.trace {
+        std::fs::write(path, output::trace_csv(&report))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = &args.vtk {
+        std::fs::write(path, output::vtk(&report))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+
+    if args.json {
+        if !args.state {
+            report.final_state = None;
+        }
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", summary(&report));
+    }
+    Ok(if report.outcome.is_completed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn summary(r: &RunReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "protocol      {} (seed {}, {:?})",
+        r.protocol.name(),
+        r.seed,
+        r.rng
+    );
+    let _ = writeln!(s, "outcome       {}", r.outcome.status());
+    if let Some(reason) = r.outcome.reason() {
+        let _ = writeln!(s, "reason        {reason}");
+    }
+    if let Some(a) = r.repose {
+        let _ = writeln!(
+            s,
+            "θ_R           {:.2}° (method 3)   method 1: {:.2}°   method 2: {:.2}°",
+            a.cumulative_fit, a.endpoints, a.line_fit
+        );
+    }
+    if let Some(t) = r.tilt {
+        let _ = writeln!(
+            s,
+            "θ_T           {:.2}° ({} grains moved)",
+            t.angle, t.moved
+        );
+    }
+    if let Some(f) = &r.flux {
+        if let Some(st) = f.steady {
+            let _ = writeln!(
+                s,
+                "θ pile        {:.2}° ± {:.2}° over {} insertions (max {:.2}°)",
+                st.mean,
+                st.sd,
+                st.n,
+                f.max.unwrap_or(f64::NAN)
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "theory        θ_MS = atan(3μ) = {:.2}°",
+        r.theory.marginal_stability
+    );
+    if let Some(t) = r.theory.tilting {
+        let _ = writeln!(s, "              θ_T by eq. (4) = {t:.2}°");
+    }
+    let g = r.grains;
+    let _ = writeln!(
+        s,
+        "grains        {} at start, {} added, {} lost, {} at end",
+        g.initial, g.inserted, g.lost, g.remaining
+    );
+    let _ = writeln!(
+        s,
+        "time          {} steps of {:.3e} s = {:.3} s simulated in {:.2} s ({:.2} M particle-steps/s)",
+        r.iterations,
+        r.options.dt,
+        r.simulated_time,
+        r.wall_time,
+        r.particle_steps_per_second / 1e6
+    );
+    let _ = writeln!(
+        s,
+        "options       integrator {}, normal force {}, shear spring {}",
+        r.options.integrator, r.options.normal_force, r.options.shear_spring
+    );
+    s
+}

@@ -1,0 +1,228 @@
+//! Measuring a pile: the surface profile `h(x)` and its slope by the three
+//! methods of Lee & Herrmann (section 3).
+
+use crate::dim::Vector;
+use serde::{Deserialize, Serialize};
+
+/// The pile's surface: the highest grain top in each column of the box.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Surface {
+    /// Column width (the mean grain diameter, adjusted to tile `[0, W]`), cm.
+    pub cell_width: f64,
+    /// Column centres, cm.
+    pub x: Vec<f64>,
+    /// Highest grain top in each column (0 for an empty column), cm.
+    pub h: Vec<f64>,
+}
+
+/// The slope of one pile by each method, as angles in degrees (positive
+/// when the surface falls towards the open side, +x).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SlopeAngles {
+    /// Method 1: the line through the first and last columns.
+    pub endpoints: f64,
+    /// Method 2: least-squares line through `h(x)`.
+    pub line_fit: f64,
+    /// Method 3 (the paper's headline): least-squares parabola through the
+    /// running sum of `h`, whose curvature gives the slope.
+    pub cumulative_fit: f64,
+}
+
+impl Surface {
+    /// Builds the profile over `[0, width]` from grain centres and radii;
+    /// a grain belongs to the column holding its centre. Grains outside the
+    /// box are ignored.
+    pub fn measure(pos: &[Vector<2>], radius: &[f64], width: f64) -> Surface {
+        let mean_d = if radius.is_empty() {
+            0.2
+        } else {
+            2.0 * radius.iter().sum::<f64>() / radius.len() as f64
+        };
+        let cells = ((width / mean_d).round() as usize).max(2);
+        let w = width / cells as f64;
+        let mut h = vec![0.0f64; cells];
+        for (x, r) in pos.iter().zip(radius) {
+            if x.x < 0.0 || x.x >= width {
+                continue;
+            }
+            let k = ((x.x / w) as usize).min(cells - 1);
+            h[k] = h[k].max(x.y + r);
+        }
+        let xs = (0..cells).map(|k| (k as f64 + 0.5) * w).collect();
+        Surface {
+            cell_width: w,
+            x: xs,
+            h,
+        }
+    }
+
+    /// The three slope estimates of section 3.
+    pub fn slope_angles(&self) -> SlopeAngles {
+        let n = self.h.len();
+        let endpoints = (self.h[n - 1] - self.h[0]) / (self.x[n - 1] - self.x[0]);
+        let line = polyfit(&self.x, &self.h, 1)[1];
+        let mut running = 0.0;
+        let sums: Vec<f64> = self
+            .h
+            .iter()
+            .map(|h| {
+                running += h;
+                running
+            })
+            .collect();
+        // If h = a + b x, the running sum is a parabola in x with curvature b / (2w).
+        let curvature = polyfit(&self.x, &sums, 2)[2];
+        let cumulative = 2.0 * self.cell_width * curvature;
+        let angle = |slope: f64| (-slope).atan().to_degrees();
+        SlopeAngles {
+            endpoints: angle(endpoints),
+            line_fit: angle(line),
+            cumulative_fit: angle(cumulative),
+        }
+    }
+}
+
+/// Least-squares polynomial of the given degree (≤ 2); returns the
+/// coefficients from the constant term up. Centred for conditioning.
+#[allow(clippy::needless_range_loop)] // row operations read clearer with indices
+fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Vec<f64> {
+    let n = x.len() as f64;
+    let xm = x.iter().sum::<f64>() / n;
+    let m = degree + 1;
+    // Normal equations in u = x − xm.
+    let mut a = [[0.0f64; 4]; 3];
+    for (&xi, &yi) in x.iter().zip(y) {
+        let u = xi - xm;
+        let powers = [1.0, u, u * u, u * u * u, u * u * u * u];
+        for r in 0..m {
+            for c in 0..m {
+                a[r][c] += powers[r + c];
+            }
+            a[r][m] += powers[r] * yi;
+        }
+    }
+    // Gaussian elimination with partial pivoting on the m × (m+1) system.
+    for col in 0..m {
+        let pivot = (col..m)
+            .max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))
+            .unwrap_or(col);
+        a.swap(col, pivot);
+        for r in 0..m {
+            if r != col && a[col][col] != 0.0 {
+                let f = a[r][col] / a[col][col];
+                for c in col..=m {
+                    a[r][c] -= f * a[col][c];
+                }
+            }
+        }
+    }
+    let c: Vec<f64> = (0..m)
+        .map(|r| {
+            if a[r][r] != 0.0 {
+                a[r][m] / a[r][r]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    // Back to powers of x: p(u) with u = x − xm.
+    match degree {
+        1 => vec![c[0] - c[1] * xm, c[1]],
+        2 => vec![
+            c[0] - c[1] * xm + c[2] * xm * xm,
+            c[1] - 2.0 * c[2] * xm,
+            c[2],
+        ],
+        _ => c,
+    }
+}
+
+/// Mean, sample standard deviation and standard error of a series.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    pub n: usize,
+    pub mean: f64,
+    /// Sample standard deviation (n − 1), the paper's error bar.
+    pub sd: f64,
+    /// Standard error of the mean.
+    pub sem: f64,
+}
+
+impl Stats {
+    pub fn of(values: &[f64]) -> Option<Stats> {
+        let n = values.len();
+        if n == 0 {
+            return None;
+        }
+        let mean = values.iter().sum::<f64>() / n as f64;
+        let sd = if n > 1 {
+            (values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64).sqrt()
+        } else {
+            0.0
+        };
+        Some(Stats {
+            n,
+            mean,
+            sd,
+            sem: sd / (n as f64).sqrt(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn surface_of(f: impl Fn(f64) -> f64) -> Surface {
+        let cells = 20;
+        let w = 0.2;
+        let x: Vec<f64> = (0..cells).map(|k| (k as f64 + 0.5) * w).collect();
+        let h = x.iter().map(|&x| f(x)).collect();
+        Surface {
+            cell_width: w,
+            x,
+            h,
+        }
+    }
+
+    #[test]
+    fn all_three_methods_agree_on_a_straight_slope() {
+        let s = surface_of(|x| 3.0 - 0.5 * x);
+        let a = s.slope_angles();
+        let expected = 0.5f64.atan().to_degrees();
+        for v in [a.endpoints, a.line_fit, a.cumulative_fit] {
+            assert!((v - expected).abs() < 1e-9, "{a:?}");
+        }
+    }
+
+    #[test]
+    fn methods_differ_on_a_curved_surface_as_the_paper_reports() {
+        // A surface that steepens at the ends: the endpoint line sees the ends only.
+        let s = surface_of(|x| 3.0 - 0.4 * x - 0.05 * (x - 2.0).powi(3));
+        let a = s.slope_angles();
+        assert!(a.endpoints > a.line_fit, "{a:?}");
+    }
+
+    #[test]
+    fn profile_takes_the_highest_top_in_each_column() {
+        let pos = vec![
+            Vector::<2>::new(0.1, 0.1),
+            Vector::<2>::new(0.15, 0.3),
+            Vector::<2>::new(3.9, 0.1),
+        ];
+        let radius = vec![0.1, 0.1, 0.1];
+        let s = Surface::measure(&pos, &radius, 4.0);
+        assert_eq!(s.h.len(), 20);
+        assert!((s.h[0] - 0.4).abs() < 1e-12);
+        assert!((s.h[19] - 0.2).abs() < 1e-12);
+        assert_eq!(s.h[5], 0.0);
+    }
+
+    #[test]
+    fn stats_use_the_sample_standard_deviation() {
+        let s = Stats::of(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+        assert_eq!(s.mean, 2.5);
+        assert!((s.sd - (5.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert!((s.sem - s.sd / 2.0).abs() < 1e-12);
+    }
+}

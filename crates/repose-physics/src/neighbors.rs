@@ -1,0 +1,251 @@
+//! Neighbour search: a cell list builds a Verlet list with a skin, and the
+//! list carries each pair's contact history.
+//!
+//! The list holds every pair `i < j` whose gap was below `skin` at build
+//! time, sorted by `(i, j)`. It stays valid until some grain has moved more
+//! than `skin / 2` since the build: only then can a pair outside the list
+//! have come into contact. Because a touching pair is always in the list, a
+//! rebuild can hand every live spring to the new list by a merge of two
+//! sorted sequences; nothing is lost, nothing is looked up by hashing.
+//! A spring is reset to its default the moment its contact opens.
+
+use crate::dim::Vector;
+use crate::particles::Particles;
+
+/// Verlet pair list with one contact-history slot per pair.
+#[derive(Debug, Clone)]
+pub struct NeighborList<const D: usize, H> {
+    /// Extra distance beyond touching for a pair to enter the list, cm.
+    pub skin: f64,
+    /// Candidate pairs `(i, j)`, `i < j`, sorted.
+    pub pairs: Vec<[u32; 2]>,
+    /// Contact history of each pair; `H::default()` when not touching.
+    pub history: Vec<H>,
+    /// How many times the list was built.
+    pub builds: u64,
+    anchor: Vec<Vector<D>>,
+    grid: CellGrid<D>,
+    scratch: Vec<u32>,
+    merged: Vec<([u32; 2], H)>,
+}
+
+impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
+    pub fn new(skin: f64) -> Self {
+        NeighborList {
+            skin,
+            pairs: Vec::new(),
+            history: Vec::new(),
+            builds: 0,
+            anchor: Vec::new(),
+            grid: CellGrid::default(),
+            scratch: Vec::new(),
+            merged: Vec::new(),
+        }
+    }
+
+    /// True once a grain has moved more than half the skin since the last
+    /// build (or the number of grains changed).
+    pub fn is_stale(&self, p: &Particles<D>) -> bool {
+        if self.anchor.len() != p.len() {
+            return true;
+        }
+        let limit = 0.25 * self.skin * self.skin;
+        p.pos
+            .iter()
+            .zip(&self.anchor)
+            .any(|(x, x0)| (x - x0).norm_squared() > limit)
+    }
+
+    /// Renumbers the stored pairs after grains were removed: `new_index[i]`
+    /// is the new index of old grain `i`, or `u32::MAX` if it is gone.
+    /// Removal preserves order, so the list stays sorted.
+    pub fn renumber(&mut self, new_index: &[u32]) {
+        let mut out = 0;
+        for k in 0..self.pairs.len() {
+            let [i, j] = self.pairs[k];
+            let (ni, nj) = (new_index[i as usize], new_index[j as usize]);
+            if ni != u32::MAX && nj != u32::MAX {
+                self.pairs[out] = [ni, nj];
+                self.history[out] = self.history[k];
+                out += 1;
+            }
+        }
+        self.pairs.truncate(out);
+        self.history.truncate(out);
+        self.anchor.clear();
+    }
+
+    /// Rebuilds the list from the current positions, keeping every live
+    /// contact history.
+    pub fn rebuild(&mut self, p: &Particles<D>) {
+        // Live springs, already sorted by pair.
+        self.merged.clear();
+        for (pair, h) in self.pairs.iter().zip(&self.history) {
+            if *h != H::default() {
+                self.merged.push((*pair, *h));
+            }
+        }
+
+        let max_radius = p.radius.iter().copied().fold(0.0, f64::max);
+        self.grid.bin(&p.pos, 2.0 * max_radius + self.skin);
+
+        self.pairs.clear();
+        let skin = self.skin;
+        for i in 0..p.len() {
+            self.scratch.clear();
+            let xi = p.pos[i];
+            let ri = p.radius[i];
+            let scratch = &mut self.scratch;
+            self.grid.for_each_near(i, |j| {
+                if j as usize > i {
+                    let reach = ri + p.radius[j as usize] + skin;
+                    if (xi - p.pos[j as usize]).norm_squared() < reach * reach {
+                        scratch.push(j);
+                    }
+                }
+            });
+            self.scratch.sort_unstable();
+            self.pairs
+                .extend(self.scratch.iter().map(|&j| [i as u32, j]));
+        }
+
+        // Hand the live springs to the new list (both sequences are sorted).
+        self.history.clear();
+        self.history.resize(self.pairs.len(), H::default());
+        let mut k = 0;
+        for (pair, h) in &self.merged {
+            while k < self.pairs.len() && self.pairs[k] < *pair {
+                k += 1;
+            }
+            if k < self.pairs.len() && self.pairs[k] == *pair {
+                self.history[k] = *h;
+            }
+        }
+
+        self.anchor.clear();
+        self.anchor.extend_from_slice(&p.pos);
+        self.builds += 1;
+    }
+}
+
+/// A uniform grid of cells at least one interaction range wide, padded by
+/// one empty cell on every side so the 3^D stencil never leaves the grid.
+#[derive(Debug, Clone)]
+struct CellGrid<const D: usize> {
+    dims: [usize; D],
+    origin: [f64; D],
+    inv_size: f64,
+    /// Grain indices sorted by cell.
+    order: Vec<u32>,
+    /// `start[c]..start[c + 1]` indexes `order` for cell `c`.
+    start: Vec<u32>,
+    cell_of: Vec<u32>,
+    stencil: Vec<isize>,
+}
+
+impl<const D: usize> Default for CellGrid<D> {
+    fn default() -> Self {
+        CellGrid {
+            dims: [0; D],
+            origin: [0.0; D],
+            inv_size: 0.0,
+            order: Vec::new(),
+            start: Vec::new(),
+            cell_of: Vec::new(),
+            stencil: Vec::new(),
+        }
+    }
+}
+
+impl<const D: usize> CellGrid<D> {
+    fn bin(&mut self, pos: &[Vector<D>], min_size: f64) {
+        let n = pos.len();
+        let mut lo = [f64::INFINITY; D];
+        let mut hi = [f64::NEG_INFINITY; D];
+        for x in pos {
+            for d in 0..D {
+                lo[d] = lo[d].min(x[d]);
+                hi[d] = hi[d].max(x[d]);
+            }
+        }
+        if n == 0 {
+            lo = [0.0; D];
+            hi = [0.0; D];
+        }
+        // Grains far apart (a few falling away) must not make the grid huge:
+        // widen the cells until the grid has at most a few cells per grain.
+        let budget = (8 * n).max(64) as f64;
+        let mut size = min_size.max(f64::MIN_POSITIVE);
+        for _ in 0..4096 {
+            let cells: f64 = (0..D)
+                .map(|d| ((hi[d] - lo[d]) / size).floor() + 3.0)
+                .product();
+            if cells <= budget {
+                break;
+            }
+            size *= 1.5;
+        }
+        self.inv_size = 1.0 / size;
+        for d in 0..D {
+            self.origin[d] = lo[d] - size;
+            self.dims[d] = ((hi[d] - lo[d]) / size).floor() as usize + 3;
+        }
+        let total: usize = self.dims.iter().product();
+
+        self.cell_of.clear();
+        self.cell_of.extend(pos.iter().map(|x| {
+            let mut c = 0usize;
+            for d in (0..D).rev() {
+                let k = ((x[d] - self.origin[d]) * self.inv_size) as usize;
+                c = c * self.dims[d] + k.clamp(1, self.dims[d] - 2);
+            }
+            c as u32
+        }));
+
+        // Counting sort of grains by cell.
+        self.start.clear();
+        self.start.resize(total + 1, 0);
+        for &c in &self.cell_of {
+            self.start[c as usize + 1] += 1;
+        }
+        for c in 0..total {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.resize(n, 0);
+        let mut fill = self.start.clone();
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            self.order[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+
+        // Flattened offsets of the 3^D neighbouring cells.
+        self.stencil.clear();
+        let mut strides = [0isize; D];
+        let mut s = 1isize;
+        for (stride, dim) in strides.iter_mut().zip(&self.dims) {
+            *stride = s;
+            s *= *dim as isize;
+        }
+        for code in 0..3usize.pow(D as u32) {
+            let mut off = 0isize;
+            let mut rest = code;
+            for stride in strides.iter() {
+                off += ((rest % 3) as isize - 1) * stride;
+                rest /= 3;
+            }
+            self.stencil.push(off);
+        }
+    }
+
+    #[inline]
+    fn for_each_near(&self, i: usize, mut f: impl FnMut(u32)) {
+        let c = self.cell_of[i] as isize;
+        for off in &self.stencil {
+            let cell = (c + off) as usize;
+            let (a, b) = (self.start[cell] as usize, self.start[cell + 1] as usize);
+            for &j in &self.order[a..b] {
+                f(j);
+            }
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! Flat walls. A wall is a plane with a unit normal pointing to the side
+//! where grains live, optionally bounded: a grain touches it only while the
+//! foot of its centre on the plane lies inside `[lo, hi]` (componentwise).
+//! A bounded floor is how the fill-and-release box ends at `x = W`.
+
+use crate::dim::Vector;
+use crate::particles::Particles;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wall<const D: usize> {
+    /// Any point of the plane, cm.
+    #[serde(with = "crate::particles::array_vec")]
+    pub point: Vector<D>,
+    /// Unit normal towards the grains (normalised on construction).
+    #[serde(with = "crate::particles::array_vec")]
+    pub normal: Vector<D>,
+    /// Bounds of the wall's extent, if any (empty: an infinite plane).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub limits: Vec<Limit>,
+}
+
+/// The foot of a grain on a wall must satisfy `min ≤ foot[axis] ≤ max`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limit {
+    /// Coordinate axis (0 = x, 1 = y, 2 = z).
+    pub axis: usize,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+}
+
+impl<const D: usize> Wall<D> {
+    /// An unbounded plane through `point` facing `normal`.
+    pub fn plane(point: Vector<D>, normal: Vector<D>) -> Self {
+        Wall {
+            point,
+            normal: normal.normalize(),
+            limits: Vec::new(),
+        }
+    }
+
+    /// Signed distance of `x` from the plane (positive on the grains' side).
+    #[inline(always)]
+    pub fn distance(&self, x: &Vector<D>) -> f64 {
+        (x - self.point).dot(&self.normal)
+    }
+
+    /// Whether the foot of `x` on the plane lies within the wall's extent.
+    #[inline(always)]
+    pub fn covers(&self, x: &Vector<D>) -> bool {
+        if self.limits.is_empty() {
+            return true;
+        }
+        let foot = x - self.normal * self.distance(x);
+        self.limits.iter().all(|l| {
+            let v = foot[l.axis.min(D - 1)];
+            l.min.map_or(true, |m| v >= m) && l.max.map_or(true, |m| v <= m)
+        })
+    }
+}
+
+/// Grains near each wall (within their radius plus the skin at the last
+/// neighbour build) and the contact history of each.
+#[derive(Debug, Clone)]
+pub struct WallContacts<H> {
+    /// For each wall, candidate grain indices, ascending.
+    pub candidates: Vec<Vec<u32>>,
+    /// For each wall, one history slot per candidate.
+    pub history: Vec<Vec<H>>,
+}
+
+impl<H: Copy + Default + PartialEq> WallContacts<H> {
+    pub fn new(walls: usize) -> Self {
+        WallContacts {
+            candidates: vec![Vec::new(); walls],
+            history: vec![Vec::new(); walls],
+        }
+    }
+
+    /// Same meaning as [`crate::neighbors::NeighborList::renumber`].
+    pub fn renumber(&mut self, new_index: &[u32]) {
+        for (cands, hist) in self.candidates.iter_mut().zip(&mut self.history) {
+            let mut out = 0;
+            for k in 0..cands.len() {
+                let ni = new_index[cands[k] as usize];
+                if ni != u32::MAX {
+                    cands[out] = ni;
+                    hist[out] = hist[k];
+                    out += 1;
+                }
+            }
+            cands.truncate(out);
+            hist.truncate(out);
+        }
+    }
+
+    /// Re-selects the candidates of every wall, keeping live histories.
+    pub fn rebuild<const D: usize>(&mut self, walls: &[Wall<D>], p: &Particles<D>, skin: f64) {
+        self.candidates.resize(walls.len(), Vec::new());
+        self.history.resize(walls.len(), Vec::new());
+        for (w, wall) in walls.iter().enumerate() {
+            let old: Vec<(u32, H)> = self.candidates[w]
+                .iter()
+                .zip(&self.history[w])
+                .filter(|(_, h)| **h != H::default())
+                .map(|(i, h)| (*i, *h))
+                .collect();
+            let cands = &mut self.candidates[w];
+            cands.clear();
+            for i in 0..p.len() {
+                if wall.distance(&p.pos[i]) < p.radius[i] + skin {
+                    cands.push(i as u32);
+                }
+            }
+            let hist = &mut self.history[w];
+            hist.clear();
+            hist.resize(cands.len(), H::default());
+            let mut k = 0;
+            for (i, h) in old {
+                while k < cands.len() && cands[k] < i {
+                    k += 1;
+                }
+                if k < cands.len() && cands[k] == i {
+                    hist[k] = h;
+                }
+            }
+        }
+    }
+}
