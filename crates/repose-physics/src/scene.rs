@@ -652,6 +652,16 @@ impl Scene {
             if wall.normal.norm() == 0.0 {
                 c.fail(&format!("walls[{i}].normal"), "must not be the zero vector");
             }
+            for (k, limit) in wall.limits.iter().enumerate() {
+                if limit.axis >= 2 {
+                    c.fail(&format!("walls[{i}].limits[{k}].axis"), "must be 0 (x) or 1 (y)");
+                }
+                for (name, v) in [("min", limit.min), ("max", limit.max)] {
+                    if let Some(v) = v {
+                        c.finite(&format!("walls[{i}].limits[{k}].{name}"), v);
+                    }
+                }
+            }
         }
 
         match self.protocol {

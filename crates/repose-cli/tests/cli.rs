@@ -1,0 +1,120 @@
+//! The `repose` binary as a user drives it: example scenes, output files,
+//! and refusals of bad input with the field named and a non-zero exit.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn repose(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_repose"))
+        .args(args)
+        .current_dir(workspace())
+        .output()
+        .expect("the repose binary runs")
+}
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn every_example_scene_parses() {
+    for entry in std::fs::read_dir(workspace().join("examples")).unwrap() {
+        let path = entry.unwrap().path();
+        let scene = std::fs::read_to_string(&path).unwrap();
+        repose_physics::Scene::from_toml(&scene, &[])
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+}
+
+#[test]
+fn collision_example_prints_one_json_document_with_the_final_state() {
+    let out = repose(&["run", "examples/collision.toml", "--json", "--state"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+    assert_eq!(report["outcome"]["status"], "completed");
+    assert_eq!(report["rng"], "chacha8");
+    assert_eq!(report["options"]["integrator"], "gear5");
+    let grains = report["final_state"]["grains"].as_array().unwrap();
+    let e = (grains[1]["velocity"][0].as_f64().unwrap() - grains[0]["velocity"][0].as_f64().unwrap()) / 10.0;
+    assert!(e > 0.5 && e < 1.0, "restitution {e}");
+    // Without --state the grains are left out.
+    let out = repose(&["run", "examples/collision.toml", "--json"]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(report.get("final_state").is_none());
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn fill_release_writes_a_snapshot_a_trace_and_a_vtk_file() {
+    let dir = std::env::temp_dir().join(format!("repose-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (svg, csv, vtk) = (dir.join("pile.svg"), dir.join("ke.csv"), dir.join("pile.vtk"));
+    let out = repose(&[
+        "run",
+        "examples/fill_release.toml",
+        "--set",
+        "box.width=2",
+        "--set",
+        "box.height=2",
+        "--snapshot",
+        svg.to_str().unwrap(),
+        "--trace",
+        csv.to_str().unwrap(),
+        "--vtk",
+        vtk.to_str().unwrap(),
+    ]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("θ_R") && stdout.contains("method 3"), "{stdout}");
+    let svg = std::fs::read_to_string(svg).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("<circle") && svg.contains("stroke-width"));
+    let csv = std::fs::read_to_string(csv).unwrap();
+    let mut lines = csv.lines();
+    assert!(lines.next().unwrap().starts_with("iteration,time_s,kinetic_energy_per_grain_erg"));
+    let phases: Vec<&str> = lines.map(|l| l.rsplit(',').next().unwrap()).collect();
+    assert!(phases.contains(&"fill") && phases.contains(&"flow"));
+    let vtk = std::fs::read_to_string(vtk).unwrap();
+    assert!(vtk.starts_with("# vtk DataFile") && vtk.contains("SCALARS radius"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bad_input_names_the_field_and_exits_non_zero() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--set", "contact.mu=-0.2"], "contact.mu"),
+        (&["--set", "grains.radius_mean=0"], "grains.radius_mean"),
+        (&["--set", "grains.radius_min=-0.1"], "grains.radius_min"),
+        (&["--set", "box.width=0.1"], "box.width"),
+        (&["--set", "box.grains=5000"], "box.grains"),
+        (&["--set", "contact.k_n=nan"], "contact.k_n"),
+        (&["--set", "numerics.dt_factor=0"], "numerics.dt_factor"),
+        (&["--set", "contact.frobnicate=1"], "contact.frobnicate"),
+        (&["--set", "contact.mu=\"high\""], "contact.mu"),
+        (&["--set", "mu"], "mu"),
+    ];
+    for (extra, field) in cases {
+        let mut args = vec!["run", "examples/fill_release.toml"];
+        args.extend_from_slice(extra);
+        let out = repose(&args);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(field), "{extra:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    let out = repose(&["run", "no/such/scene.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("cannot read scene file"));
+}
+
+#[test]
+fn a_run_that_fails_says_why_and_exits_with_one() {
+    // A time step twenty times the contact time: the grains fly through each other.
+    let out = repose(&["run", "examples/collision.toml", "--set", "numerics.dt=2e-3", "--set", "duration=0.05"]);
+    let stdout = text(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("failed") && stdout.contains("reason"), "{stdout}");
+}
