@@ -39,7 +39,9 @@ fn collision_example_prints_one_json_document_with_the_final_state() {
     assert_eq!(report["rng"], "chacha8");
     assert_eq!(report["options"]["integrator"], "gear5");
     let grains = report["final_state"]["grains"].as_array().unwrap();
-    let e = (grains[1]["velocity"][0].as_f64().unwrap() - grains[0]["velocity"][0].as_f64().unwrap()) / 10.0;
+    let e = (grains[1]["velocity"][0].as_f64().unwrap()
+        - grains[0]["velocity"][0].as_f64().unwrap())
+        / 10.0;
     assert!(e > 0.5 && e < 1.0, "restitution {e}");
     // Without --state the grains are left out.
     let out = repose(&["run", "examples/collision.toml", "--json"]);
@@ -52,7 +54,11 @@ fn collision_example_prints_one_json_document_with_the_final_state() {
 fn fill_release_writes_a_snapshot_a_trace_and_a_vtk_file() {
     let dir = std::env::temp_dir().join(format!("repose-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let (svg, csv, vtk) = (dir.join("pile.svg"), dir.join("ke.csv"), dir.join("pile.vtk"));
+    let (svg, csv, vtk) = (
+        dir.join("pile.svg"),
+        dir.join("ke.csv"),
+        dir.join("pile.vtk"),
+    );
     let out = repose(&[
         "run",
         "examples/fill_release.toml",
@@ -69,12 +75,18 @@ fn fill_release_writes_a_snapshot_a_trace_and_a_vtk_file() {
     ]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
-    assert!(stdout.contains("θ_R") && stdout.contains("method 3"), "{stdout}");
+    assert!(
+        stdout.contains("θ_R") && stdout.contains("method 3"),
+        "{stdout}"
+    );
     let svg = std::fs::read_to_string(svg).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("<circle") && svg.contains("stroke-width"));
     let csv = std::fs::read_to_string(csv).unwrap();
     let mut lines = csv.lines();
-    assert!(lines.next().unwrap().starts_with("iteration,time_s,kinetic_energy_per_grain_erg"));
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("iteration,time_s,kinetic_energy_per_grain_erg"));
     let phases: Vec<&str> = lines.map(|l| l.rsplit(',').next().unwrap()).collect();
     assert!(phases.contains(&"fill") && phases.contains(&"flow"));
     let vtk = std::fs::read_to_string(vtk).unwrap();
@@ -113,8 +125,18 @@ fn bad_input_names_the_field_and_exits_non_zero() {
 #[test]
 fn a_run_that_fails_says_why_and_exits_with_one() {
     // A time step twenty times the contact time: the grains fly through each other.
-    let out = repose(&["run", "examples/collision.toml", "--set", "numerics.dt=2e-3", "--set", "duration=0.05"]);
+    let out = repose(&[
+        "run",
+        "examples/collision.toml",
+        "--set",
+        "numerics.dt=2e-3",
+        "--set",
+        "duration=0.05",
+    ]);
     let stdout = text(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
-    assert!(stdout.contains("failed") && stdout.contains("reason"), "{stdout}");
+    assert!(
+        stdout.contains("failed") && stdout.contains("reason"),
+        "{stdout}"
+    );
 }

@@ -14,7 +14,7 @@ use crate::integrate::{Gear5, Integrator, Scheme, VelocityVerlet};
 use crate::measure::{Stats, Surface};
 use crate::particles::Particles;
 use crate::report::*;
-use crate::scene::{Protocol, Scene, SceneError};
+use crate::scene::{Equilibrium, Protocol, Scene, SceneError};
 use crate::setup::{random_column, sphere_mass, Stream};
 use crate::theory;
 use crate::walls::Wall;
@@ -342,47 +342,19 @@ impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
     /// `hold` seconds (speed and energy low at every check, no grain moved
     /// more than `max_displacement` diameters), or `max_time` has passed.
     fn settle(&mut self, phase: Phase, max_time: f64) -> Result<(), Stop> {
-        let eq = &self.scene.equilibrium;
-        let (max_speed, max_ke, hold) = (eq.max_speed, eq.kinetic_energy, eq.hold);
         let start = self.sim.time;
-        // Window start: time, and positions by grain id.
-        let mut window: Option<(f64, Vec<(u32, Vector<2>)>)> = None;
+        let mut window = StillWindow::default();
         loop {
             let point = self.sample(phase)?;
-            let calm = point.max_speed < max_speed && point.kinetic_energy < max_ke;
-            if !calm {
-                window = None;
-            } else if let Some((since, anchor)) = &window {
-                if self.sim.time - since >= hold {
-                    if self.still_since(anchor) {
-                        return Ok(());
-                    }
-                    window = None;
-                }
-            }
-            if calm && window.is_none() {
-                let p = &self.sim.particles;
-                window = Some((
-                    self.sim.time,
-                    p.id.iter().copied().zip(p.pos.iter().copied()).collect(),
-                ));
+            let eq = &self.scene.equilibrium;
+            if window.settled(&self.sim.particles, self.sim.time, calm(&point, eq), eq) {
+                return Ok(());
             }
             if self.sim.time - start >= max_time {
                 return Err(Stop::TimedOut);
             }
             self.sim.run(self.check_steps)?;
         }
-    }
-
-    /// True if no grain present in `anchor` has moved more than the
-    /// equilibrium's displacement limit (grains that left count as moved).
-    fn still_since(&self, anchor: &[(u32, Vector<2>)]) -> bool {
-        let p = &self.sim.particles;
-        let limit = self.scene.equilibrium.max_displacement * 2.0 * p.mean_radius();
-        let start: HashMap<u32, Vector<2>> = anchor.iter().copied().collect();
-        p.id.iter()
-            .zip(&p.pos)
-            .all(|(id, x)| start.get(id).is_some_and(|x0| (x - x0).norm() <= limit))
     }
 
     fn surface(&self) -> Surface {
@@ -520,11 +492,10 @@ impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
         max_time: f64,
         after_motion: bool,
     ) -> Result<Rest, Stop> {
-        let eq = self.scene.equilibrium.clone();
         let start = self.sim.time;
         let mut moving = !after_motion;
         let steps = (self.check_steps / 5).max(1);
-        let mut window: Option<(f64, Vec<(u32, Vector<2>)>)> = None;
+        let mut window = StillWindow::default();
         loop {
             let v = self.sim.particles.max_speed();
             if v >= v_cut {
@@ -534,24 +505,9 @@ impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
             }
             if moving && self.sim.iteration % self.check_steps < steps {
                 let point = self.sample(Phase::Flux)?;
-                let calm =
-                    point.max_speed < eq.max_speed && point.kinetic_energy < eq.kinetic_energy;
-                match &window {
-                    Some((since, anchor)) if calm && self.sim.time - since >= eq.hold => {
-                        if self.still_since(anchor) {
-                            return Ok(Rest::ByDisplacement);
-                        }
-                        window = None;
-                    }
-                    Some(_) if !calm => window = None,
-                    _ => {}
-                }
-                if calm && window.is_none() {
-                    let p = &self.sim.particles;
-                    window = Some((
-                        self.sim.time,
-                        p.id.iter().copied().zip(p.pos.iter().copied()).collect(),
-                    ));
+                let eq = &self.scene.equilibrium;
+                if window.settled(&self.sim.particles, self.sim.time, calm(&point, eq), eq) {
+                    return Ok(Rest::ByDisplacement);
                 }
             }
             if self.sim.time - start >= max_time {
@@ -559,6 +515,46 @@ impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
             }
             self.sim.run(steps)?;
         }
+    }
+}
+
+/// The speed and energy half of the equilibrium test, at one check.
+fn calm(point: &TracePoint, eq: &Equilibrium) -> bool {
+    point.max_speed < eq.max_speed && point.kinetic_energy < eq.kinetic_energy
+}
+
+/// The displacement half of the equilibrium test: a window opens when the
+/// pile is calm, and the pile is settled once it has stayed calm for `hold`
+/// seconds with no grain moved more than `max_displacement` mean diameters
+/// from where it was when the window opened (grains that left count as
+/// moved). A window that fails is replaced by a new one.
+#[derive(Default)]
+struct StillWindow {
+    open: Option<(f64, HashMap<u32, Vector<2>>)>,
+}
+
+impl StillWindow {
+    fn settled(&mut self, p: &Particles<2>, time: f64, calm: bool, eq: &Equilibrium) -> bool {
+        if !calm {
+            self.open = None;
+            return false;
+        }
+        if let Some((since, anchor)) = &self.open {
+            if time - since < eq.hold {
+                return false;
+            }
+            let limit = eq.max_displacement * 2.0 * p.mean_radius();
+            let still =
+                p.id.iter()
+                    .zip(&p.pos)
+                    .all(|(id, x)| anchor.get(id).is_some_and(|x0| (x - x0).norm() <= limit));
+            if still {
+                return true;
+            }
+        }
+        let anchor = p.id.iter().copied().zip(p.pos.iter().copied()).collect();
+        self.open = Some((time, anchor));
+        false
     }
 }
 

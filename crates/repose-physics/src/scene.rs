@@ -554,6 +554,13 @@ impl Scene {
                         g.radius_min, g.radius_max
                     ),
                 );
+            } else if g.radius_sd > 0.0 && g.radius_max - g.radius_min < 0.01 * g.radius_sd {
+                // Draws outside the window are repeated; a window this narrow
+                // would almost never be hit.
+                c.fail(
+                    "grains.radius_sd",
+                    "the window [radius_min, radius_max] is too narrow for this spread; set radius_sd = 0 for equal grains",
+                );
             }
         }
 
@@ -654,7 +661,10 @@ impl Scene {
             }
             for (k, limit) in wall.limits.iter().enumerate() {
                 if limit.axis >= 2 {
-                    c.fail(&format!("walls[{i}].limits[{k}].axis"), "must be 0 (x) or 1 (y)");
+                    c.fail(
+                        &format!("walls[{i}].limits[{k}].axis"),
+                        "must be 0 (x) or 1 (y)",
+                    );
                 }
                 for (name, v) in [("min", limit.min), ("max", limit.max)] {
                     if let Some(v) = v {
@@ -843,6 +853,7 @@ mod tests {
             ("contact.k_n=nan", "contact.k_n"),
             ("numerics.dt_factor=0", "numerics.dt_factor"),
             ("numerics.dt_factor=-1", "numerics.dt_factor"),
+            ("grains.radius_sd=10", "grains.radius_sd"),
         ];
         for (o, field) in cases {
             let err =
