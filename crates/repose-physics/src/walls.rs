@@ -58,7 +58,7 @@ impl<const D: usize> Wall<D> {
         let foot = x - self.normal * self.distance(x);
         self.limits.iter().all(|l| {
             let v = foot[l.axis.min(D - 1)];
-            l.min.map_or(true, |m| v >= m) && l.max.map_or(true, |m| v <= m)
+            l.min.is_none_or(|m| v >= m) && l.max.is_none_or(|m| v <= m)
         })
     }
 }

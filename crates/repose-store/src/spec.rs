@@ -1,0 +1,364 @@
+//! Sweep specifications and their expansion into jobs.
+//!
+//! A sweep names a protocol, a base scene, axes (lists of values for any
+//! scene key, written as dotted paths such as `contact.mu`), the number of
+//! samples per point, a fidelity preset and a seed base. Expansion builds
+//! one fully resolved scene per (point, sample) and validates each with the
+//! physics crate's own checks, so a sweep is refused exactly when one of
+//! its scenes would be.
+
+use repose_physics::scene::{FieldError, Protocol, Scene, SceneError};
+use repose_physics::ENGINE;
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+
+/// The largest number of jobs one sweep may expand into.
+pub const MAX_JOBS: usize = 100_000;
+
+/// Named speed/accuracy settings, applied to every scene of a sweep where
+/// the base scene does not set the value itself.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Fidelity {
+    /// Velocity Verlet, a coarser step and a shorter equilibrium window.
+    Quick,
+    /// Velocity Verlet at the default step.
+    #[default]
+    Standard,
+    /// The paper's Gear-5 integrator at the default step.
+    Paper,
+}
+
+impl Fidelity {
+    /// The scene values this preset sets, as dotted keys.
+    pub fn settings(self) -> Vec<(&'static str, Value)> {
+        match self {
+            Fidelity::Quick => vec![
+                ("numerics.integrator", Value::from("verlet")),
+                ("numerics.dt_factor", Value::from(0.03)),
+                ("equilibrium.hold", Value::from(0.05)),
+            ],
+            Fidelity::Standard => vec![("numerics.integrator", Value::from("verlet"))],
+            Fidelity::Paper => vec![("numerics.integrator", Value::from("gear5"))],
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// A name to show; defaults to the protocol and the axes.
+    #[serde(default)]
+    pub name: Option<String>,
+    pub protocol: Protocol,
+    /// Scene values shared by every job (any key of the scene document
+    /// except `protocol` and `seed`).
+    #[serde(default)]
+    pub base: Map<String, Value>,
+    /// Values to sweep, by dotted scene key.
+    #[serde(default)]
+    pub axes: BTreeMap<String, Vec<Value>>,
+    /// Samples (seeds) per point.
+    #[serde(default = "one")]
+    pub samples: u32,
+    #[serde(default)]
+    pub fidelity: Fidelity,
+    /// Sample `k` of every point runs with seed `seed_base + k`.
+    #[serde(default)]
+    pub seed_base: u64,
+    /// Higher runs first.
+    #[serde(default)]
+    pub priority: i64,
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// One job of an expanded sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobSpec {
+    /// The axis values of this job's point.
+    pub point: Map<String, Value>,
+    pub sample: u32,
+    pub seed: u64,
+    /// The fully resolved scene, as stored and run.
+    pub scene: Scene,
+    /// Identity of the sample: SHA-256 of the canonical scene and the engine version.
+    pub sample_hash: String,
+}
+
+fn field_error(field: impl Into<String>, message: impl Into<String>) -> SceneError {
+    SceneError {
+        errors: vec![FieldError {
+            field: field.into(),
+            message: message.into(),
+        }],
+    }
+}
+
+/// Sets a dotted key in a JSON object, creating tables on the way.
+fn set_path(doc: &mut Map<String, Value>, key: &str, value: Value) -> Result<(), String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err("empty segment in the key".into());
+    }
+    let mut table = doc;
+    for part in &parts[..parts.len() - 1] {
+        let entry = table
+            .entry(part.to_string())
+            .or_insert_with(|| Value::Object(Map::new()));
+        table = match entry {
+            Value::Object(t) => t,
+            _ => return Err(format!("`{part}` is not a table")),
+        };
+    }
+    table.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+fn has_path(doc: &Map<String, Value>, key: &str) -> bool {
+    let mut table = doc;
+    let parts: Vec<&str> = key.split('.').collect();
+    for (k, part) in parts.iter().enumerate() {
+        match table.get(*part) {
+            None => return false,
+            Some(Value::Object(t)) if k + 1 < parts.len() => table = t,
+            Some(_) => return k + 1 == parts.len(),
+        }
+    }
+    false
+}
+
+impl SweepSpec {
+    /// A display name: the given one, or the protocol and the swept keys.
+    pub fn display_name(&self) -> String {
+        self.name.clone().unwrap_or_else(|| {
+            let axes: Vec<&str> = self.axes.keys().map(|k| k.as_str()).collect();
+            if axes.is_empty() {
+                self.protocol.name().to_string()
+            } else {
+                format!("{} over {}", self.protocol.name(), axes.join(" × "))
+            }
+        })
+    }
+
+    /// Number of jobs the sweep expands into (saturating).
+    pub fn job_count(&self) -> usize {
+        self.axes
+            .values()
+            .fold(self.samples as usize, |n, v| n.saturating_mul(v.len()))
+    }
+
+    /// Validates the spec and builds every job, in (point, sample) order.
+    pub fn expand(&self) -> Result<Vec<JobSpec>, SceneError> {
+        if self.samples == 0 {
+            return Err(field_error("samples", "must be at least 1"));
+        }
+        for key in ["protocol", "seed"] {
+            if self.base.contains_key(key) {
+                return Err(field_error(
+                    format!("base.{key}"),
+                    format!("`{key}` is set by the sweep itself"),
+                ));
+            }
+        }
+        for (key, values) in &self.axes {
+            if values.is_empty() {
+                return Err(field_error(
+                    format!("axes.{key}"),
+                    "an axis needs at least one value",
+                ));
+            }
+            if key == "protocol" || key == "seed" {
+                return Err(field_error(format!("axes.{key}"), "cannot be swept"));
+            }
+        }
+        let total = self.job_count();
+        if total > MAX_JOBS {
+            return Err(field_error(
+                "axes",
+                format!("the sweep expands into {total} jobs, more than the limit of {MAX_JOBS}"),
+            ));
+        }
+        if self
+            .seed_base
+            .checked_add(self.samples as u64)
+            .is_none_or(|s| s > i64::MAX as u64)
+        {
+            return Err(field_error(
+                "seed_base",
+                "seed_base + samples must stay below 2^63",
+            ));
+        }
+
+        let mut base = self.base.clone();
+        base.insert(
+            "protocol".into(),
+            serde_json::to_value(self.protocol).expect("protocol serialises"),
+        );
+        for (key, value) in self.fidelity.settings() {
+            if !has_path(&base, key) && !self.axes.contains_key(key) {
+                set_path(&mut base, key, value).expect("preset keys are well formed");
+            }
+        }
+
+        let keys: Vec<&String> = self.axes.keys().collect();
+        let mut jobs = Vec::with_capacity(total);
+        let mut index = vec![0usize; keys.len()];
+        loop {
+            let mut point = Map::new();
+            let mut doc = base.clone();
+            for (k, key) in keys.iter().enumerate() {
+                let value = self.axes[*key][index[k]].clone();
+                set_path(&mut doc, key, value.clone())
+                    .map_err(|m| field_error(format!("axes.{key}"), m))?;
+                point.insert((*key).clone(), value);
+            }
+            for sample in 0..self.samples {
+                let seed = self.seed_base + sample as u64;
+                let mut scene_doc = doc.clone();
+                scene_doc.insert("seed".into(), Value::from(seed));
+                let scene =
+                    Scene::from_json(Value::Object(scene_doc)).map_err(|e| locate(e, &point))?;
+                let scene = scene.resolved();
+                let sample_hash = sample_hash(&scene);
+                jobs.push(JobSpec {
+                    point: point.clone(),
+                    sample,
+                    seed,
+                    scene,
+                    sample_hash,
+                });
+            }
+            // Next point: odometer over the axes, last key fastest.
+            let mut k = keys.len();
+            loop {
+                if k == 0 {
+                    return Ok(jobs);
+                }
+                k -= 1;
+                index[k] += 1;
+                if index[k] < self.axes[keys[k]].len() {
+                    break;
+                }
+                index[k] = 0;
+            }
+        }
+    }
+}
+
+/// Points a scene error at the sweep's own fields: a key set by an axis is
+/// reported as `axes.<key>`, anything else as `base.<key>`.
+fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
+    for e in &mut err.errors {
+        let swept = point
+            .keys()
+            .any(|k| e.field == *k || e.field.starts_with(&format!("{k}.")));
+        e.field = if swept {
+            format!("axes.{}", e.field)
+        } else {
+            format!("base.{}", e.field)
+        };
+        if !point.is_empty() {
+            e.message = format!("{} (at {})", e.message, Value::Object(point.clone()));
+        }
+    }
+    err
+}
+
+/// SHA-256 of the canonical JSON of a resolved scene (keys sorted) and the
+/// engine version: the identity of a sample.
+pub fn sample_hash(scene: &Scene) -> String {
+    let canonical = serde_json::to_value(scene).expect("scenes serialise");
+    let mut h = Sha256::new();
+    h.update(ENGINE.as_bytes());
+    h.update([0u8]);
+    h.update(canonical.to_string().as_bytes());
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn spec(v: Value) -> SweepSpec {
+        serde_json::from_value(v).unwrap()
+    }
+
+    #[test]
+    fn expands_points_times_samples_with_seeds() {
+        let s = spec(json!({
+            "protocol": "fill_release",
+            "base": {"box": {"width": 2.0, "height": 2.0}},
+            "axes": {"contact.mu": [0.1, 0.2, 0.3], "box.width": [2.0, 3.0]},
+            "samples": 4, "seed_base": 100
+        }));
+        let jobs = s.expand().unwrap();
+        assert_eq!(jobs.len(), 24);
+        assert_eq!(
+            jobs[0].point,
+            json!({"box.width": 2.0, "contact.mu": 0.1})
+                .as_object()
+                .unwrap()
+                .clone()
+        );
+        assert_eq!(jobs[0].seed, 100);
+        assert_eq!(jobs[3].seed, 103);
+        assert_eq!(jobs[4].scene.contact.mu, 0.2);
+        assert_eq!(jobs[23].scene.container.width, 3.0);
+        assert_eq!(jobs[23].scene.container.height, 2.0);
+        // standard preset: Verlet; the resolved scene carries its time step
+        assert_eq!(jobs[0].scene.numerics.integrator.name(), "verlet");
+        assert!(jobs[0].scene.numerics.dt.is_some());
+        let hashes: std::collections::HashSet<_> = jobs.iter().map(|j| &j.sample_hash).collect();
+        assert_eq!(hashes.len(), 24);
+    }
+
+    #[test]
+    fn same_scene_and_seed_hash_alike_across_sweeps() {
+        let a = spec(json!({"protocol": "tilt", "axes": {"contact.mu": [0.2]}, "samples": 2}));
+        let b = spec(json!({"protocol": "tilt", "base": {"contact": {"mu": 0.2}}, "samples": 3}));
+        let (ja, jb) = (a.expand().unwrap(), b.expand().unwrap());
+        assert_eq!(ja[1].sample_hash, jb[1].sample_hash);
+        assert_ne!(ja[0].sample_hash, ja[1].sample_hash);
+    }
+
+    #[test]
+    fn bad_sweeps_name_the_field() {
+        let cases = [
+            (
+                json!({"protocol": "tilt", "axes": {"contact.mu": []}}),
+                "axes.contact.mu",
+            ),
+            (
+                json!({"protocol": "tilt", "axes": {"contact.mu": [0.1, -0.2]}}),
+                "axes.contact.mu",
+            ),
+            (
+                json!({"protocol": "tilt", "axes": {"contact.mu": ["x"]}}),
+                "axes.contact.mu",
+            ),
+            (
+                json!({"protocol": "tilt", "base": {"box": {"width": -1}}}),
+                "base.box.width",
+            ),
+            (json!({"protocol": "tilt", "samples": 0}), "samples"),
+            (
+                json!({"protocol": "tilt", "axes": {"contact.mu": vec![0.1; 1000], "box.width": vec![4.0; 1000]}}),
+                "axes",
+            ),
+            (
+                json!({"protocol": "tilt", "base": {"seed": 3}}),
+                "base.seed",
+            ),
+        ];
+        for (v, field) in cases {
+            let err = spec(v.clone()).expand().unwrap_err();
+            assert_eq!(err.errors[0].field, field, "{v}: {err}");
+        }
+    }
+}

@@ -1,0 +1,264 @@
+//! Queue semantics against real databases: an SQLite file, and PostgreSQL
+//! on 127.0.0.1:5432 (`REPOSE_TEST_POSTGRES` overrides the server URL). With
+//! `CI=true` the PostgreSQL tests fail when the server is unreachable;
+//! elsewhere they say so and skip.
+
+use repose_physics::{run, Quiet, RunReport, Scene};
+use repose_store::spec::SweepSpec;
+use repose_store::{Lease, Store};
+use serde_json::json;
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// A real (tiny) run report to store.
+fn report() -> RunReport {
+    let scene = Scene::from_toml(
+        "protocol = \"free_run\"\nduration = 0.001\n[[particles]]\nposition = [0.0, 0.0]\nradius = 0.1",
+        &[],
+    )
+    .unwrap();
+    run(&scene, &mut Quiet).unwrap()
+}
+
+fn sweep(samples: u32, mus: &[f64]) -> SweepSpec {
+    serde_json::from_value(json!({
+        "protocol": "fill_release",
+        "axes": {"contact.mu": mus},
+        "samples": samples,
+    }))
+    .unwrap()
+}
+
+async fn sqlite() -> Store {
+    let dir = std::env::temp_dir().join(format!(
+        "repose-store-{}-{}",
+        std::process::id(),
+        uuid::Uuid::new_v4()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    Store::open(&format!("sqlite://{}", dir.join("queue.db").display()))
+        .await
+        .unwrap()
+}
+
+/// A fresh PostgreSQL database (with its name, to drop it after the test),
+/// or None (outside CI) when no server answers.
+async fn postgres() -> Option<(Store, sqlx::AnyPool, String)> {
+    let server = std::env::var("REPOSE_TEST_POSTGRES")
+        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
+    let name = format!("repose_test_{}", uuid::Uuid::new_v4().simple());
+    sqlx::any::install_default_drivers();
+    let admin = sqlx::AnyPool::connect(&format!("{server}/postgres")).await;
+    let admin = match admin {
+        Ok(a) => a,
+        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
+            eprintln!("skipping the PostgreSQL half: {e}");
+            return None;
+        }
+        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    };
+    sqlx::query(&format!("CREATE DATABASE {name}"))
+        .execute(&admin)
+        .await
+        .unwrap();
+    let store = Store::open(&format!("{server}/{name}")).await.unwrap();
+    Some((store, admin, name))
+}
+
+async fn each_backend<F, Fut>(test: F)
+where
+    F: Fn(Store) -> Fut,
+    Fut: std::future::Future<Output = ()>,
+{
+    test(sqlite().await).await;
+    if let Some((store, admin, name)) = postgres().await {
+        let pool = store.pool().clone();
+        test(store).await;
+        pool.close().await;
+        sqlx::query(&format!("DROP DATABASE {name}"))
+            .execute(&admin)
+            .await
+            .unwrap();
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn concurrent_workers_complete_every_job_exactly_once() {
+    each_backend(|store| async move {
+        let spec = sweep(10, &[0.1, 0.2, 0.3, 0.4]);
+        let jobs = spec.expand().unwrap();
+        let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        assert_eq!((created.jobs, created.reused), (40, 0));
+        let report = report();
+        let done = Arc::new(Mutex::new(Vec::new()));
+        let mut workers = Vec::new();
+        for w in 0..4 {
+            let store = store.clone();
+            let done = done.clone();
+            let report = report.clone();
+            workers.push(tokio::spawn(async move {
+                let owner = format!("worker-{w}");
+                while let Some(c) = store.claim(&owner, Duration::from_secs(60)).await.unwrap() {
+                    assert!(store
+                        .complete(&c.job_id, &owner, &c.sample_hash, &report)
+                        .await
+                        .unwrap());
+                    done.lock().unwrap().push(c.job_id);
+                }
+            }));
+        }
+        for w in workers {
+            w.await.unwrap();
+        }
+        let done = done.lock().unwrap().clone();
+        let unique: HashSet<_> = done.iter().collect();
+        assert_eq!(done.len(), 40, "every job once");
+        assert_eq!(unique.len(), 40, "no job twice");
+        let p = store.progress(&created.id).await.unwrap();
+        assert_eq!((p.done, p.queued, p.running), (40, 0, 0));
+        for j in &jobs {
+            assert_eq!(store.result_count(&j.sample_hash).await.unwrap(), 1);
+        }
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn an_expired_lease_goes_back_to_the_queue_and_the_old_owner_cannot_complete() {
+    each_backend(|store| async move {
+        let spec = sweep(1, &[0.2]);
+        let jobs = spec.expand().unwrap();
+        store.create_sweep(&spec, &jobs, 2).await.unwrap();
+        let first = store
+            .claim("crashed", Duration::from_millis(1))
+            .await
+            .unwrap()
+            .unwrap();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        let second = store
+            .claim("rescuer", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(first.job_id, second.job_id);
+        assert_eq!(second.attempts, 2);
+        let report = report();
+        assert!(!store
+            .complete(&first.job_id, "crashed", &first.sample_hash, &report)
+            .await
+            .unwrap());
+        assert_eq!(
+            store
+                .heartbeat(&first.job_id, "crashed", Duration::from_secs(1))
+                .await
+                .unwrap(),
+            Lease::Lost
+        );
+        assert!(store
+            .complete(&second.job_id, "rescuer", &second.sample_hash, &report)
+            .await
+            .unwrap());
+        assert_eq!(store.result_count(&first.sample_hash).await.unwrap(), 1);
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn a_job_out_of_attempts_is_failed_with_the_reason() {
+    each_backend(|store| async move {
+        let spec = sweep(1, &[0.2]);
+        let jobs = spec.expand().unwrap();
+        let created = store.create_sweep(&spec, &jobs, 2).await.unwrap();
+        for _ in 0..2 {
+            store
+                .claim("flaky", Duration::from_millis(1))
+                .await
+                .unwrap()
+                .unwrap();
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        assert!(store
+            .claim("next", Duration::from_secs(1))
+            .await
+            .unwrap()
+            .is_none());
+        let p = store.progress(&created.id).await.unwrap();
+        assert_eq!((p.failed, p.queued, p.running), (1, 0, 0));
+        let error: String = sqlx::query_scalar("SELECT error FROM jobs")
+            .fetch_one(store.pool())
+            .await
+            .unwrap();
+        assert!(error.contains("lease expired after 2 attempts"), "{error}");
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
+    each_backend(|store| async move {
+        let spec = sweep(3, &[0.2]);
+        let jobs = spec.expand().unwrap();
+        let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        let running = store
+            .claim("w", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert!(store.cancel_sweep(&created.id).await.unwrap());
+        assert!(!store.cancel_sweep("no-such-sweep").await.unwrap());
+        assert!(store
+            .claim("w2", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .is_none());
+        assert_eq!(
+            store
+                .heartbeat(&running.job_id, "w", Duration::from_secs(60))
+                .await
+                .unwrap(),
+            Lease::Cancelled
+        );
+        assert!(store.release(&running.job_id, "w").await.unwrap());
+        let p = store.progress(&created.id).await.unwrap();
+        assert_eq!((p.cancelled, p.running, p.queued), (3, 0, 0));
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn a_sweep_reuses_samples_already_computed_and_priority_orders_claims() {
+    each_backend(|store| async move {
+        let report = report();
+        let first = sweep(2, &[0.2]);
+        let jobs = first.expand().unwrap();
+        store.create_sweep(&first, &jobs, 3).await.unwrap();
+        while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
+            store
+                .complete(&c.job_id, "w", &c.sample_hash, &report)
+                .await
+                .unwrap();
+        }
+        // The same two samples plus two new ones.
+        let again = sweep(4, &[0.2]);
+        let created = store
+            .create_sweep(&again, &again.expand().unwrap(), 3)
+            .await
+            .unwrap();
+        assert_eq!((created.jobs, created.reused), (4, 2));
+        // A later sweep of higher priority is claimed first.
+        let mut urgent = sweep(1, &[0.3]);
+        urgent.priority = 10;
+        let u = store
+            .create_sweep(&urgent, &urgent.expand().unwrap(), 3)
+            .await
+            .unwrap();
+        let c = store
+            .claim("w", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.sweep_id, u.id);
+    })
+    .await;
+}
