@@ -21,7 +21,7 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         ymax = ymax.max(g.position.y + g.radius);
     }
     let ymin = -0.1;
-    ymax = ymax.max(r.scene.container.height) + 0.1;
+    ymax = ymax.max(r.scene.container.fill_height()) + 0.1;
     xmin -= 0.1;
     xmax += 0.1;
     let scale = 800.0 / (xmax - xmin).max(1e-9);

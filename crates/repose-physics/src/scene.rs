@@ -195,6 +195,9 @@ pub struct BoxSpec {
     pub width: f64,
     /// Height H to fill, cm.
     pub height: f64,
+    /// If set, H = aspect · W and `height` is ignored (for sweeps over W at
+    /// a fixed aspect ratio, the paper's fig. 2b).
+    pub aspect: Option<f64>,
     /// Number of grains; by default enough to fill W×H (`grains_per_area · W · H`).
     pub grains: Option<usize>,
     /// Grains per cm² of box when `grains` is not given (25 fills the box
@@ -204,11 +207,19 @@ pub struct BoxSpec {
     pub placement_fraction: f64,
 }
 
+impl BoxSpec {
+    /// The height to fill: `aspect · width` when an aspect ratio is set.
+    pub fn fill_height(&self) -> f64 {
+        self.aspect.map_or(self.height, |a| a * self.width)
+    }
+}
+
 impl Default for BoxSpec {
     fn default() -> Self {
         BoxSpec {
             width: 4.0,
             height: 4.0,
+            aspect: None,
             grains: None,
             grains_per_area: 25.0,
             placement_fraction: 0.35,
@@ -471,8 +482,8 @@ impl Scene {
             return self.particles.len();
         }
         self.container.grains.unwrap_or_else(|| {
-            (self.container.grains_per_area * self.container.width * self.container.height).round()
-                as usize
+            (self.container.grains_per_area * self.container.width * self.container.fill_height())
+                .round() as usize
         })
     }
 
@@ -524,6 +535,7 @@ impl Scene {
         if self.protocol != Protocol::FreeRun && self.particles.is_empty() {
             s.container.grains = Some(self.grain_count());
         }
+        s.container.height = self.container.fill_height();
         s.numerics.dt = Some(self.time_step());
         s
     }
@@ -716,6 +728,9 @@ impl Scene {
         let b = &self.container;
         c.positive("box.width", b.width);
         c.positive("box.height", b.height);
+        if let Some(a) = b.aspect {
+            c.positive("box.aspect", a);
+        }
         c.positive("box.grains_per_area", b.grains_per_area);
         c.fraction("box.placement_fraction", b.placement_fraction, true);
         if !c.0.is_empty() {
@@ -746,13 +761,14 @@ impl Scene {
         }
         if self.protocol != Protocol::Flux {
             let need = n as f64 * self.mean_disc_area();
-            let room = MAX_PACKING * b.width * b.height;
+            let room = MAX_PACKING * b.width * b.fill_height();
             if need > room {
                 c.fail(
                     "box.grains",
                     format!(
                         "{n} grains cover {need:.3} cm², more than a {} × {} box holds at a packing fraction of {MAX_PACKING} ({room:.3} cm²)",
-                        b.width, b.height
+                        b.width,
+                        b.fill_height()
                     ),
                 );
             }

@@ -461,3 +461,394 @@ impl Store {
         Ok(r.get("n"))
     }
 }
+
+/// The angles a result carries, by the names the API and exports use.
+pub const METRICS: &[(&str, &str)] = &[
+    (
+        "theta_r",
+        "θ_R, method 3 (parabola through the running sum), degrees",
+    ),
+    (
+        "theta_r_line",
+        "θ_R, method 2 (least-squares line), degrees",
+    ),
+    (
+        "theta_r_endpoints",
+        "θ_R, method 1 (first and last columns), degrees",
+    ),
+    ("theta_t", "tilting angle θ_T, degrees"),
+    (
+        "theta_ms_mean",
+        "steady mean pile angle of the flux protocol, degrees",
+    ),
+    (
+        "theta_ms_max",
+        "largest steady pile angle of the flux protocol, degrees",
+    ),
+];
+
+/// Mean, sample standard deviation and standard error of one metric at one point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Aggregate {
+    pub n: i64,
+    pub mean: Option<f64>,
+    /// Sample standard deviation (n − 1): the paper's error bar.
+    pub sd: Option<f64>,
+    pub sem: Option<f64>,
+}
+
+impl Aggregate {
+    /// From the count, sum and sum of squares.
+    fn from_sums(n: i64, sum: Option<f64>, sum_sq: Option<f64>) -> Aggregate {
+        if n == 0 {
+            return Aggregate {
+                n,
+                mean: None,
+                sd: None,
+                sem: None,
+            };
+        }
+        let (s, q) = (sum.unwrap_or(0.0), sum_sq.unwrap_or(0.0));
+        let mean = s / n as f64;
+        let sd = (n > 1).then(|| ((q - s * mean) / (n - 1) as f64).max(0.0).sqrt());
+        Aggregate {
+            n,
+            mean: Some(mean),
+            sd,
+            sem: sd.map(|sd| sd / (n as f64).sqrt()),
+        }
+    }
+}
+
+/// One point of a sweep: its axis values and the statistics of its samples.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Point {
+    pub point: serde_json::Map<String, serde_json::Value>,
+    /// Samples with a stored result.
+    pub samples: i64,
+    /// Of those, samples whose run ended without a result (not settled, failed, …).
+    pub failures: i64,
+    pub metrics: std::collections::BTreeMap<String, Aggregate>,
+}
+
+/// One stored sample of a sweep.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Sample {
+    pub job_id: String,
+    pub sample_hash: String,
+    pub point: serde_json::Map<String, serde_json::Value>,
+    pub sample: i64,
+    pub seed: i64,
+    pub outcome: String,
+    pub reason: Option<String>,
+    pub theta_r: Option<f64>,
+    pub theta_r_line: Option<f64>,
+    pub theta_r_endpoints: Option<f64>,
+    pub theta_t: Option<f64>,
+    pub theta_ms_mean: Option<f64>,
+    pub theta_ms_sd: Option<f64>,
+    pub theta_ms_max: Option<f64>,
+    pub grains_initial: i64,
+    pub grains_final: i64,
+    pub grains_lost: i64,
+    pub iterations: i64,
+    pub simulated_time: f64,
+    pub wall_time: f64,
+    pub engine: String,
+}
+
+/// A sweep as listed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepInfo {
+    pub id: String,
+    pub name: String,
+    pub protocol: String,
+    pub priority: i64,
+    pub state: String,
+    pub created_at: i64,
+    pub spec: serde_json::Value,
+    pub progress: Progress,
+    /// Estimated seconds until the queued and running jobs are done, from
+    /// the mean wall time of this sweep's finished samples and the number of
+    /// jobs running now (none while nothing runs or nothing has finished).
+    pub eta_seconds: Option<f64>,
+}
+
+fn parse_point(text: &str) -> Result<serde_json::Map<String, serde_json::Value>> {
+    match serde_json::from_str(text)? {
+        serde_json::Value::Object(m) => Ok(m),
+        _ => Ok(serde_json::Map::new()),
+    }
+}
+
+impl Store {
+    /// Ends a running job without a result (its scene could not be run at all).
+    pub async fn fail(&self, job_id: &str, owner: &str, reason: &str) -> Result<bool> {
+        let r = sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'failed', error = $1, lease_owner = NULL, lease_expires = NULL, updated_at = $2 \
+             WHERE id = $3 AND lease_owner = $4 AND state = 'running'",
+        ))
+        .bind(reason)
+        .bind(now_ms())
+        .bind(job_id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(r.rows_affected() == 1)
+    }
+
+    /// All sweeps, newest first, with progress.
+    pub async fn sweeps(&self) -> Result<Vec<SweepInfo>> {
+        let ids: Vec<String> =
+            sqlx::query_scalar(&self.sql("SELECT id FROM sweeps ORDER BY created_at DESC, id"))
+                .fetch_all(&self.pool)
+                .await?;
+        let mut out = Vec::with_capacity(ids.len());
+        for id in ids {
+            if let Some(s) = self.sweep(&id).await? {
+                out.push(s);
+            }
+        }
+        Ok(out)
+    }
+
+    /// One sweep with its progress and ETA, or None.
+    pub async fn sweep(&self, id: &str) -> Result<Option<SweepInfo>> {
+        let Some(row) = sqlx::query(&self.sql(
+            "SELECT id, name, protocol, spec, priority, state, created_at FROM sweeps WHERE id = $1",
+        ))
+        .bind(id)
+        .fetch_optional(&self.pool)
+        .await?
+        else {
+            return Ok(None);
+        };
+        let progress = self.progress(id).await?;
+        let mean_wall: Option<f64> = sqlx::query_scalar(&self.sql(
+            "SELECT AVG(r.wall_time) FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 AND j.state = 'done'",
+        ))
+        .bind(id)
+        .fetch_one(&self.pool)
+        .await?;
+        let left = progress.queued + progress.running;
+        let eta_seconds = match (mean_wall, progress.running) {
+            (_, _) if left == 0 => Some(0.0),
+            (Some(w), r) if r > 0 => Some(w * left as f64 / r as f64),
+            _ => None,
+        };
+        Ok(Some(SweepInfo {
+            id: row.get("id"),
+            name: row.get("name"),
+            protocol: row.get("protocol"),
+            priority: row.get("priority"),
+            state: row.get("state"),
+            created_at: row.get("created_at"),
+            spec: serde_json::from_str(&row.get::<String, _>("spec"))?,
+            progress,
+            eta_seconds,
+        }))
+    }
+
+    /// Every stored sample of a sweep, in job order.
+    pub async fn samples(&self, sweep_id: &str) -> Result<Vec<Sample>> {
+        let rows = sqlx::query(&self.sql(
+            "SELECT j.id AS job_id, j.sample_hash, j.point, j.sample, j.seed, r.outcome, r.reason, r.theta_r, r.theta_r_line, \
+             r.theta_r_endpoints, r.theta_t, r.theta_ms_mean, r.theta_ms_sd, r.theta_ms_max, r.grains_initial, r.grains_final, \
+             r.grains_lost, r.iterations, r.simulated_time, r.wall_time, r.engine \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash WHERE j.sweep_id = $1 ORDER BY j.seq",
+        ))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        rows.into_iter()
+            .map(|r| {
+                Ok(Sample {
+                    job_id: r.get("job_id"),
+                    sample_hash: r.get("sample_hash"),
+                    point: parse_point(&r.get::<String, _>("point"))?,
+                    sample: r.get("sample"),
+                    seed: r.get("seed"),
+                    outcome: r.get("outcome"),
+                    reason: r.get("reason"),
+                    theta_r: r.get("theta_r"),
+                    theta_r_line: r.get("theta_r_line"),
+                    theta_r_endpoints: r.get("theta_r_endpoints"),
+                    theta_t: r.get("theta_t"),
+                    theta_ms_mean: r.get("theta_ms_mean"),
+                    theta_ms_sd: r.get("theta_ms_sd"),
+                    theta_ms_max: r.get("theta_ms_max"),
+                    grains_initial: r.get("grains_initial"),
+                    grains_final: r.get("grains_final"),
+                    grains_lost: r.get("grains_lost"),
+                    iterations: r.get("iterations"),
+                    simulated_time: r.get("simulated_time"),
+                    wall_time: r.get("wall_time"),
+                    engine: r.get("engine"),
+                })
+            })
+            .collect()
+    }
+
+    /// Per-point statistics of every metric, computed in the database from
+    /// counts, sums and sums of squares.
+    pub async fn points(&self, sweep_id: &str) -> Result<Vec<Point>> {
+        let mut columns = String::new();
+        for (m, _) in METRICS {
+            columns.push_str(&format!(
+                ", COUNT(r.{m}) AS {m}_n, SUM(r.{m}) AS {m}_s, SUM(r.{m} * r.{m}) AS {m}_q"
+            ));
+        }
+        let rows = sqlx::query(&self.sql(&format!(
+            "SELECT j.point, MIN(j.seq) AS first, COUNT(*) AS samples, \
+             CAST(SUM(CASE WHEN r.outcome = 'completed' THEN 0 ELSE 1 END) AS BIGINT) AS failures{columns} \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 GROUP BY j.point ORDER BY first"
+        )))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        rows.into_iter()
+            .map(|r| {
+                let metrics = METRICS
+                    .iter()
+                    .map(|(m, _)| {
+                        let agg = Aggregate::from_sums(
+                            r.get(format!("{m}_n").as_str()),
+                            r.get(format!("{m}_s").as_str()),
+                            r.get(format!("{m}_q").as_str()),
+                        );
+                        (m.to_string(), agg)
+                    })
+                    .collect();
+                Ok(Point {
+                    point: parse_point(&r.get::<String, _>("point"))?,
+                    samples: r.get("samples"),
+                    failures: r.get("failures"),
+                    metrics,
+                })
+            })
+            .collect()
+    }
+
+    /// The full run report of one sample.
+    pub async fn report(&self, sample_hash: &str) -> Result<Option<serde_json::Value>> {
+        let text: Option<String> =
+            sqlx::query_scalar(&self.sql("SELECT report FROM results WHERE sample_hash = $1"))
+                .bind(sample_hash)
+                .fetch_optional(&self.pool)
+                .await?;
+        Ok(match text {
+            Some(t) => Some(serde_json::from_str(&t)?),
+            None => None,
+        })
+    }
+}
+
+/// One plotted point of a figure: x, the series it belongs to, and the
+/// statistics of the y metric there.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SeriesPoint {
+    pub x: serde_json::Value,
+    pub series: Option<serde_json::Value>,
+    pub n: i64,
+    pub mean: Option<f64>,
+    pub sd: Option<f64>,
+    pub sem: Option<f64>,
+    /// Samples at this point that ended without a result.
+    pub failures: i64,
+}
+
+/// Why a series cannot be drawn from a sweep.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SeriesError {
+    #[error("unknown metric `{0}`")]
+    Metric(String),
+    #[error("the sweep does not vary `{0}`")]
+    Axis(String),
+}
+
+/// Picks `x` (and optionally a `series` key) from the points' axis values
+/// and the statistics of metric `y`, sorted by series then x.
+pub fn series(
+    points: &[Point],
+    x: &str,
+    series: Option<&str>,
+    y: &str,
+) -> std::result::Result<Vec<SeriesPoint>, SeriesError> {
+    if !METRICS.iter().any(|(m, _)| *m == y) {
+        return Err(SeriesError::Metric(y.to_string()));
+    }
+    for key in std::iter::once(x).chain(series) {
+        if !points.iter().any(|p| p.point.contains_key(key)) {
+            return Err(SeriesError::Axis(key.to_string()));
+        }
+    }
+    let mut out: Vec<SeriesPoint> = points
+        .iter()
+        .map(|p| {
+            let agg = p.metrics[y];
+            SeriesPoint {
+                x: p.point.get(x).cloned().unwrap_or(serde_json::Value::Null),
+                series: series.map(|s| p.point.get(s).cloned().unwrap_or(serde_json::Value::Null)),
+                n: agg.n,
+                mean: agg.mean,
+                sd: agg.sd,
+                sem: agg.sem,
+                failures: p.failures,
+            }
+        })
+        .collect();
+    let key = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    out.sort_by(|a, b| {
+        let sa = a.series.as_ref().map(key).unwrap_or(0.0);
+        let sb = b.series.as_ref().map(key).unwrap_or(0.0);
+        sa.total_cmp(&sb).then(key(&a.x).total_cmp(&key(&b.x)))
+    });
+    Ok(out)
+}
+
+/// The paper's figures as (x, series, y) choices over a sweep's axes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Figure {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub x: &'static str,
+    pub series: Option<&'static str>,
+    pub y: &'static str,
+}
+
+pub const FIGURES: &[Figure] = &[
+    Figure {
+        name: "2a",
+        title: "θ_R against the box height H (W = 2, μ = 0.2)",
+        x: "box.height",
+        series: None,
+        y: "theta_r",
+    },
+    Figure {
+        name: "2b",
+        title: "θ_R against the box width W for several μ (H/W = 2)",
+        x: "box.width",
+        series: Some("contact.mu"),
+        y: "theta_r",
+    },
+    Figure {
+        name: "3",
+        title: "θ_R against μ (W = H = 4)",
+        x: "contact.mu",
+        series: None,
+        y: "theta_r",
+    },
+    Figure {
+        name: "4",
+        title: "θ_T against μ (W = H = 4)",
+        x: "contact.mu",
+        series: None,
+        y: "theta_t",
+    },
+];
+
+pub fn figure(name: &str) -> Option<&'static Figure> {
+    FIGURES.iter().find(|f| f.name == name)
+}

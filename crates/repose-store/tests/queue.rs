@@ -262,3 +262,62 @@ async fn a_sweep_reuses_samples_already_computed_and_priority_orders_claims() {
     })
     .await;
 }
+
+#[tokio::test]
+async fn point_statistics_match_the_samples_they_summarise() {
+    each_backend(|store| async move {
+        let spec = sweep(5, &[0.1, 0.3]);
+        let jobs = spec.expand().unwrap();
+        let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        let base = report();
+        let mut k = 0.0;
+        while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
+            let mut r = base.clone();
+            k += 1.0;
+            if k == 4.0 {
+                // one sample without a result: counted apart, no angle
+                r.outcome = repose_physics::Outcome::NotSettled {
+                    phase: "flow".into(),
+                    reason: "test".into(),
+                };
+            } else {
+                r.repose = Some(repose_physics::measure::SlopeAngles {
+                    endpoints: 30.0 - k,
+                    line_fit: 20.0 + 0.5 * k,
+                    cumulative_fit: 10.0 + k * k,
+                });
+            }
+            store
+                .complete(&c.job_id, "w", &c.sample_hash, &r)
+                .await
+                .unwrap();
+        }
+        let samples = store.samples(&created.id).await.unwrap();
+        assert_eq!(samples.len(), 10);
+        let points = store.points(&created.id).await.unwrap();
+        assert_eq!(points.len(), 2);
+        for p in &points {
+            let mine: Vec<&repose_store::Sample> =
+                samples.iter().filter(|s| s.point == p.point).collect();
+            let values: Vec<f64> = mine.iter().filter_map(|s| s.theta_r).collect();
+            let expected = repose_physics::measure::Stats::of(&values).unwrap();
+            let got = p.metrics["theta_r"];
+            assert_eq!(got.n as usize, expected.n);
+            assert!((got.mean.unwrap() - expected.mean).abs() < 1e-9);
+            assert!((got.sd.unwrap() - expected.sd).abs() < 1e-9);
+            assert!((got.sem.unwrap() - expected.sem).abs() < 1e-9);
+            assert_eq!(
+                p.failures as usize,
+                mine.iter().filter(|s| s.outcome != "completed").count()
+            );
+            assert_eq!(p.metrics["theta_t"].n, 0);
+        }
+        assert_eq!(points.iter().map(|p| p.failures).sum::<i64>(), 1);
+        let s = repose_store::series(&points, "contact.mu", None, "theta_r").unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].x, json!(0.1));
+        assert!(repose_store::series(&points, "box.width", None, "theta_r").is_err());
+        assert!(repose_store::series(&points, "contact.mu", None, "volume").is_err());
+    })
+    .await;
+}
