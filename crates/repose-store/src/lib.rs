@@ -24,6 +24,7 @@
 //! This crate knows the scene and report only as documents: it stores what
 //! the physics crate produced and reads back the few numbers it aggregates.
 
+pub mod export;
 pub mod spec;
 
 use repose_physics::RunReport;
@@ -450,6 +451,13 @@ impl Store {
             }
         }
         Ok(p)
+    }
+
+    /// Number of sweeps (also a cheap check that the database answers).
+    pub async fn sweeps_count(&self) -> Result<i64> {
+        Ok(sqlx::query_scalar("SELECT COUNT(*) FROM sweeps")
+            .fetch_one(&self.pool)
+            .await?)
     }
 
     /// Number of stored results with this hash (0 or 1 by construction).

@@ -1,0 +1,165 @@
+//! The router driven without a network (`tower::ServiceExt::oneshot`) over
+//! a real SQLite store: validation answers, 404s, sweep lifecycle.
+
+use axum::body::Body;
+use axum::http::{Request, StatusCode};
+use http_body_util::BodyExt;
+use repose_store::Store;
+use serde_json::{json, Value};
+use tower::ServiceExt;
+
+async fn store() -> Store {
+    let dir =
+        std::env::temp_dir().join(format!("repose-api-{}-{}", std::process::id(), rand_name()));
+    std::fs::create_dir_all(&dir).unwrap();
+    Store::open(&format!("sqlite://{}", dir.join("api.db").display()))
+        .await
+        .unwrap()
+}
+
+fn rand_name() -> u128 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos()
+}
+
+async fn call(
+    store: &Store,
+    method: &str,
+    uri: &str,
+    body: Option<&str>,
+) -> (StatusCode, Value, String) {
+    let req = Request::builder()
+        .method(method)
+        .uri(uri)
+        .header("content-type", "application/json")
+        .body(
+            body.map(|b| Body::from(b.to_string()))
+                .unwrap_or_else(Body::empty),
+        )
+        .unwrap();
+    let resp = repose_api::app(store.clone()).oneshot(req).await.unwrap();
+    let status = resp.status();
+    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
+    let text = String::from_utf8_lossy(&bytes).into_owned();
+    let json = serde_json::from_str(&text).unwrap_or(Value::Null);
+    (status, json, text)
+}
+
+#[tokio::test]
+async fn invalid_sweeps_get_a_4xx_naming_the_field() {
+    let s = store().await;
+    let cases: Vec<(String, StatusCode, &str)> = vec![
+        ("{not json".into(), StatusCode::BAD_REQUEST, "(body)"),
+        (json!({"protocol": "fill_release", "axes": {"contact.mu": []}}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "axes.contact.mu"),
+        (json!({"protocol": "fill_release", "axes": {"contact.mu": [0.2, -0.1]}}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "axes.contact.mu"),
+        (json!({"protocol": "fill_release", "samples": "many"}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "samples"),
+        (json!({"protocol": "fill_release", "samples": -3}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "samples"),
+        (json!({"protocol": "sideways"}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "protocol"),
+        (json!({"protocol": "fill_release", "colour": "red"}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "colour"),
+        (json!({"protocol": "fill_release", "base": {"contact": {"k_n": "stiff"}}}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "base.contact.k_n"),
+        (json!({"protocol": "fill_release", "axes": {"box.width": [0.05]}}).to_string(), StatusCode::UNPROCESSABLE_ENTITY, "axes.box.width"),
+        (
+            json!({"protocol": "fill_release", "samples": 1000, "axes": {"contact.mu": vec![0.2; 1000]}}).to_string(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "axes",
+        ),
+    ];
+    for (body, status, field) in cases {
+        let (got, json, text) = call(&s, "POST", "/api/sweeps", Some(&body)).await;
+        assert_eq!(got, status, "{body}: {text}");
+        assert!(
+            json["errors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e["field"] == field),
+            "{body}: {text}"
+        );
+        assert!(json["error"].as_str().unwrap().len() > 5);
+    }
+    // nothing was stored
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    assert_eq!(list["sweeps"].as_array().unwrap().len(), 0);
+}
+
+#[tokio::test]
+async fn unknown_things_are_404() {
+    let s = store().await;
+    for uri in [
+        "/api/sweeps/no-such-id",
+        "/api/sweeps/no-such-id/points",
+        "/api/sweeps/no-such-id/samples?format=csv",
+        "/api/sweeps/no-such-id/figures/3",
+        "/api/samples/abc",
+        "/api/nothing-here",
+    ] {
+        let (status, json, text) = call(&s, "GET", uri, None).await;
+        assert_eq!(status, StatusCode::NOT_FOUND, "{uri}: {text}");
+        assert!(json["error"].is_string(), "{uri}: {text}");
+    }
+    let (status, _, _) = call(&s, "POST", "/api/sweeps/no-such-id/cancel", None).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+}
+
+#[tokio::test]
+async fn a_sweep_is_created_listed_shown_and_cancelled() {
+    let s = store().await;
+    let spec = json!({"protocol": "tilt", "axes": {"contact.mu": [0.1, 0.2]}, "samples": 3, "priority": 2});
+    let (status, created, text) = call(&s, "POST", "/api/sweeps", Some(&spec.to_string())).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_eq!(created["jobs"], 6);
+    let id = created["id"].as_str().unwrap().to_string();
+    let (_, shown, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(shown["progress"]["queued"], 6);
+    assert_eq!(shown["priority"], 2);
+    assert_eq!(shown["name"], "tilt over contact.mu");
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    assert_eq!(list["sweeps"][0]["id"], id.as_str());
+    // No results yet: points are empty, a figure over an axis not swept is refused.
+    let (status, points, _) = call(&s, "GET", &format!("/api/sweeps/{id}/points"), None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(points["points"].as_array().unwrap().len(), 0);
+    let (status, err, _) = call(
+        &s,
+        "GET",
+        &format!("/api/sweeps/{id}/series?y=theta_r"),
+        None,
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert_eq!(err["errors"][0]["field"], "x");
+    let (status, _, _) = call(&s, "GET", &format!("/api/sweeps/{id}/figures/9"), None).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    let (status, _, _) = call(
+        &s,
+        "GET",
+        &format!("/api/sweeps/{id}/points?format=xml"),
+        None,
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    let (status, cancelled, _) = call(&s, "POST", &format!("/api/sweeps/{id}/cancel"), None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(cancelled["state"], "cancelled");
+    assert_eq!(cancelled["progress"]["cancelled"], 6);
+}
+
+#[tokio::test]
+async fn health_and_the_openapi_document_are_served() {
+    let s = store().await;
+    let (status, health, _) = call(&s, "GET", "/api/health", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(health["database"], "sqlite");
+    let (status, doc, _) = call(&s, "GET", "/api/openapi.json", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(doc["openapi"], "3.1.0");
+    for path in [
+        "/api/sweeps",
+        "/api/sweeps/{id}/points",
+        "/api/sweeps/{id}/figures/{figure}",
+    ] {
+        assert!(doc["paths"][path].is_object(), "{path}");
+    }
+}

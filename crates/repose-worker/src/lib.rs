@@ -1,0 +1,231 @@
+//! # repose-worker
+//!
+//! A worker loops: claim a job → run its scene on a blocking thread →
+//! record the report. While the scene runs, the worker renews its lease on
+//! a timer; the heartbeat also learns when the sweep was cancelled or the
+//! lease was lost, and the run is then stopped at its next equilibrium
+//! check (a few milliseconds of simulated time). A shutdown request (SIGTERM)
+//! stops the current run the same way and hands its job back to the queue,
+//! so no job is ever left half-written: either its result and its `done`
+//! state are written together, or the job returns to the queue.
+//!
+//! A run that ends without a result (not settled, blow-up) is still a
+//! result: its outcome and reason are stored like any other. Only a scene
+//! that cannot even be read marks the job failed.
+
+use repose_physics::{Observer, Progress, Scene};
+use repose_store::{Lease, Store};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::watch;
+
+/// How a worker talks to the queue.
+#[derive(Debug, Clone)]
+pub struct WorkerConfig {
+    /// Name recorded as the lease owner (host, process, index).
+    pub owner: String,
+    /// Lease length; a worker that stops renewing loses its job after this long.
+    pub lease: Duration,
+    /// Heartbeat period (well below the lease).
+    pub heartbeat: Duration,
+    /// Wait between claims while the queue is empty.
+    pub idle: Duration,
+    /// Stop once the queue is empty instead of waiting for more work.
+    pub exit_when_idle: bool,
+}
+
+impl WorkerConfig {
+    pub fn new(owner: impl Into<String>) -> Self {
+        WorkerConfig {
+            owner: owner.into(),
+            lease: Duration::from_secs(60),
+            heartbeat: Duration::from_secs(10),
+            idle: Duration::from_millis(500),
+            exit_when_idle: false,
+        }
+    }
+}
+
+/// What a worker did before it stopped.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Results written.
+    pub completed: u64,
+    /// Jobs handed back (shutdown, cancelled sweep).
+    pub released: u64,
+    /// Results not written because the lease was lost.
+    pub lost: u64,
+    /// Jobs whose scene could not be read.
+    pub failed: u64,
+}
+
+/// Stops a run when its flag is raised.
+struct StopFlag(Arc<AtomicBool>);
+
+impl Observer for StopFlag {
+    fn progress(&mut self, _update: &Progress) -> bool {
+        !self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// Runs jobs until `shutdown` turns true (or, with `exit_when_idle`, until
+/// the queue is empty).
+pub async fn run_worker(
+    store: Store,
+    config: WorkerConfig,
+    mut shutdown: watch::Receiver<bool>,
+) -> Tally {
+    let mut tally = Tally::default();
+    loop {
+        if *shutdown.borrow() {
+            return tally;
+        }
+        let claim = match store.claim(&config.owner, config.lease).await {
+            Ok(c) => c,
+            Err(e) => {
+                tracing::warn!(owner = %config.owner, "claim failed: {e}");
+                None
+            }
+        };
+        let Some(job) = claim else {
+            if config.exit_when_idle {
+                return tally;
+            }
+            tokio::select! {
+                _ = tokio::time::sleep(config.idle) => {}
+                _ = shutdown.changed() => {}
+            }
+            continue;
+        };
+        tracing::info!(owner = %config.owner, job = %job.job_id, attempt = job.attempts, "claimed");
+
+        let scene: Scene = match serde_json::from_str::<serde_json::Value>(&job.scene)
+            .map_err(|e| e.to_string())
+            .and_then(|v| Scene::from_json(v).map_err(|e| e.to_string()))
+        {
+            Ok(s) => s,
+            Err(reason) => {
+                let _ = store
+                    .fail(
+                        &job.job_id,
+                        &config.owner,
+                        &format!("unreadable scene: {reason}"),
+                    )
+                    .await;
+                tally.failed += 1;
+                continue;
+            }
+        };
+
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let mut simulation =
+            tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut StopFlag(flag)));
+        let mut beat = tokio::time::interval(config.heartbeat);
+        beat.tick().await;
+        let mut lease = Lease::Held;
+        let mut stopping = false;
+        let outcome = loop {
+            tokio::select! {
+                done = &mut simulation => break done,
+                _ = beat.tick() => {
+                    match store.heartbeat(&job.job_id, &config.owner, config.lease).await {
+                        Ok(Lease::Held) => {}
+                        Ok(other) => { lease = other; stop.store(true, Ordering::Relaxed); }
+                        Err(e) => tracing::warn!(job = %job.job_id, "heartbeat failed: {e}"),
+                    }
+                }
+                _ = shutdown.changed(), if !stopping => {
+                    if *shutdown.borrow() {
+                        stopping = true;
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                }
+            }
+        };
+
+        let report = match outcome {
+            Ok(Ok(report)) => report,
+            Ok(Err(invalid)) => {
+                let _ = store
+                    .fail(
+                        &job.job_id,
+                        &config.owner,
+                        &format!("invalid scene: {invalid}"),
+                    )
+                    .await;
+                tally.failed += 1;
+                continue;
+            }
+            Err(panic) => {
+                let _ = store
+                    .fail(
+                        &job.job_id,
+                        &config.owner,
+                        &format!("the engine panicked: {panic}"),
+                    )
+                    .await;
+                tally.failed += 1;
+                continue;
+            }
+        };
+
+        if stop.load(Ordering::Relaxed)
+            || matches!(report.outcome, repose_physics::Outcome::Cancelled { .. })
+        {
+            if lease != Lease::Lost
+                && store
+                    .release(&job.job_id, &config.owner)
+                    .await
+                    .unwrap_or(false)
+            {
+                tally.released += 1;
+            } else {
+                tally.lost += 1;
+            }
+            tracing::info!(job = %job.job_id, "handed back");
+            continue;
+        }
+        match store
+            .complete(&job.job_id, &config.owner, &job.sample_hash, &report)
+            .await
+        {
+            Ok(true) => tally.completed += 1,
+            Ok(false) => {
+                tally.lost += 1;
+                tracing::warn!(job = %job.job_id, "lease lost before completion; result not written");
+            }
+            Err(e) => {
+                tally.lost += 1;
+                tracing::warn!(job = %job.job_id, "could not store the result: {e}");
+            }
+        }
+    }
+}
+
+/// A shutdown channel that turns true on SIGTERM or Ctrl-C.
+pub fn shutdown_on_signals() -> watch::Receiver<bool> {
+    let (tx, rx) = watch::channel(false);
+    tokio::spawn(async move {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{signal, SignalKind};
+            let mut term = match signal(SignalKind::terminate()) {
+                Ok(s) => s,
+                Err(_) => return,
+            };
+            tokio::select! {
+                _ = term.recv() => {}
+                _ = tokio::signal::ctrl_c() => {}
+            }
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = tokio::signal::ctrl_c().await;
+        }
+        tracing::info!("shutting down: finishing or handing back the current jobs");
+        let _ = tx.send(true);
+    });
+    rx
+}
