@@ -182,7 +182,8 @@ async fn create_sweep(
     let created = s.store.create_sweep(&spec, &jobs, MAX_ATTEMPTS).await?;
     let message = if created.reused > 0 {
         format!(
-            "{} jobs queued; {} of them reuse samples already computed",
+            "{} jobs: {} queued, {} reuse samples already computed",
+            created.jobs,
             created.jobs - created.reused,
             created.reused
         )

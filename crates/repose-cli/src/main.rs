@@ -5,10 +5,14 @@
 //! repose run examples/tilt.toml --set contact.mu=0.3 --json
 //! repose run examples/fill_release.toml --snapshot pile.svg --trace ke.csv
 //! repose bench
+//! repose serve                      # API + workers on sqlite://repose.db
+//! repose submit sweeps/figure3.toml --wait
+//! repose worker --database postgres://host/db
 //! ```
 
 mod bench;
 mod output;
+mod service;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -36,6 +40,16 @@ enum Command {
     Run(RunArgs),
     /// Measure engine throughput (particle-steps per second, single thread).
     Bench(bench::BenchArgs),
+    /// Run the API and embedded workers (SQLite file by default).
+    Serve(service::ServeArgs),
+    /// Run headless workers against a shared database (cluster nodes).
+    Worker(service::WorkerArgs),
+    /// Queue a sweep on a running server.
+    Submit(service::SubmitArgs),
+    /// List sweeps, or show one sweep's points.
+    Status(service::StatusArgs),
+    /// Export a sweep's samples or points as CSV.
+    Export(service::ExportArgs),
 }
 
 #[derive(clap::Args)]
@@ -70,6 +84,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Serve(args) => service::serve(args),
+        Command::Worker(args) => service::worker(args),
+        Command::Submit(args) => service::submit(args),
+        Command::Status(args) => service::status(args),
+        Command::Export(args) => service::export(args),
     };
     match result {
         Ok(code) => code,

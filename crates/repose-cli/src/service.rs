@@ -1,0 +1,415 @@
+//! The service commands: `serve` (API plus embedded workers), `worker`
+//! (headless, for cluster nodes), and the clients `submit`, `status` and
+//! `export`, which talk to a running server over its HTTP API.
+
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use repose_store::Store;
+use repose_worker::{run_worker, shutdown_on_signals, Tally, WorkerConfig};
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// The embedded default database: a file beside where `repose serve` runs.
+pub const DEFAULT_DATABASE: &str = "sqlite://repose.db";
+const DEFAULT_SERVER: &str = "http://127.0.0.1:8080";
+
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// Database URL: sqlite://FILE (created on first start) or postgres://...
+    #[arg(long, default_value = DEFAULT_DATABASE, env = "REPOSE_DATABASE")]
+    database: String,
+    /// Address to listen on (port 0 picks a free one).
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    listen: String,
+    /// Embedded workers (default: one per core; 0 for an API-only server).
+    #[arg(long)]
+    workers: Option<usize>,
+    #[command(flatten)]
+    lease: LeaseArgs,
+}
+
+#[derive(clap::Args)]
+pub struct WorkerArgs {
+    /// Database URL shared with the server and the other workers.
+    #[arg(long, env = "REPOSE_DATABASE")]
+    database: String,
+    /// Jobs to run at once in this process (default 1; one per core fills a node).
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    /// Stop when the queue is empty instead of waiting for more work
+    /// (for batch-scheduler jobs).
+    #[arg(long)]
+    exit_when_idle: bool,
+    #[command(flatten)]
+    lease: LeaseArgs,
+}
+
+#[derive(clap::Args, Clone)]
+pub struct LeaseArgs {
+    /// Lease length in seconds: a job whose worker stops renewing returns to the queue after this long.
+    #[arg(long, default_value_t = 60.0)]
+    lease: f64,
+    /// Heartbeat period in seconds.
+    #[arg(long, default_value_t = 10.0)]
+    heartbeat: f64,
+}
+
+impl LeaseArgs {
+    fn config(&self, owner: String) -> anyhow::Result<WorkerConfig> {
+        if !(self.lease > 0.0 && self.heartbeat > 0.0 && self.heartbeat < self.lease) {
+            bail!("--heartbeat must be positive and shorter than --lease");
+        }
+        let mut c = WorkerConfig::new(owner);
+        c.lease = Duration::from_secs_f64(self.lease);
+        c.heartbeat = Duration::from_secs_f64(self.heartbeat);
+        Ok(c)
+    }
+}
+
+#[derive(clap::Args)]
+pub struct SubmitArgs {
+    /// Sweep spec, TOML or JSON (see docs/service.md).
+    spec: PathBuf,
+    /// URL of the running server.
+    #[arg(long, default_value = DEFAULT_SERVER, env = "REPOSE_SERVER")]
+    server: String,
+    /// Wait for the sweep to finish, with a progress bar.
+    #[arg(long)]
+    wait: bool,
+}
+
+#[derive(clap::Args)]
+pub struct StatusArgs {
+    /// A sweep id for its points; none for the list of sweeps.
+    sweep: Option<String>,
+    #[arg(long, default_value = DEFAULT_SERVER, env = "REPOSE_SERVER")]
+    server: String,
+}
+
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// The sweep to export.
+    sweep: String,
+    /// What to export: samples (one row per sample) or points (statistics per point).
+    #[arg(long, value_parser = ["samples", "points"], default_value = "points")]
+    what: String,
+    /// Write to this file instead of standard output.
+    #[arg(long, short)]
+    output: Option<PathBuf>,
+    #[arg(long, default_value = DEFAULT_SERVER, env = "REPOSE_SERVER")]
+    server: String,
+}
+
+fn runtime() -> anyhow::Result<tokio::runtime::Runtime> {
+    Ok(tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?)
+}
+
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_env("REPOSE_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
+}
+
+fn owner_prefix() -> String {
+    let host = std::fs::read_to_string("/etc/hostname")
+        .map(|h| h.trim().to_string())
+        .unwrap_or_else(|_| "host".into());
+    format!("{host}-{}", std::process::id())
+}
+
+fn spawn_workers(
+    store: &Store,
+    count: usize,
+    lease: &LeaseArgs,
+    exit_when_idle: bool,
+    shutdown: &tokio::sync::watch::Receiver<bool>,
+) -> anyhow::Result<Vec<tokio::task::JoinHandle<Tally>>> {
+    let prefix = owner_prefix();
+    (0..count)
+        .map(|k| {
+            let mut config = lease.config(format!("{prefix}-{k}"))?;
+            config.exit_when_idle = exit_when_idle;
+            Ok(tokio::spawn(run_worker(
+                store.clone(),
+                config,
+                shutdown.clone(),
+            )))
+        })
+        .collect()
+}
+
+pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
+    init_logging();
+    runtime()?.block_on(async {
+        let store = Store::open(&args.database)
+            .await
+            .with_context(|| format!("cannot open the database {}", args.database))?;
+        let listener = tokio::net::TcpListener::bind(&args.listen)
+            .await
+            .with_context(|| format!("cannot listen on {}", args.listen))?;
+        let addr = listener.local_addr()?;
+        let workers = args.workers.unwrap_or_else(|| {
+            std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)
+        });
+        let shutdown = shutdown_on_signals();
+        let handles = spawn_workers(&store, workers, &args.lease, false, &shutdown)?;
+        println!(
+            "repose: serving http://{addr}/ ({}, {workers} workers)",
+            args.database
+        );
+        let mut stop = shutdown.clone();
+        axum::serve(listener, repose_api::app(store))
+            .with_graceful_shutdown(async move {
+                while !*stop.borrow() {
+                    if stop.changed().await.is_err() {
+                        break;
+                    }
+                }
+            })
+            .await?;
+        for h in handles {
+            let _ = h.await;
+        }
+        Ok(ExitCode::SUCCESS)
+    })
+}
+
+pub fn worker(args: WorkerArgs) -> anyhow::Result<ExitCode> {
+    init_logging();
+    if args.threads == 0 {
+        bail!("--threads must be at least 1");
+    }
+    runtime()?.block_on(async {
+        let store = Store::open(&args.database)
+            .await
+            .with_context(|| format!("cannot open the database {}", args.database))?;
+        let shutdown = shutdown_on_signals();
+        let handles = spawn_workers(
+            &store,
+            args.threads,
+            &args.lease,
+            args.exit_when_idle,
+            &shutdown,
+        )?;
+        let mut total = Tally::default();
+        for h in handles {
+            let t = h.await?;
+            total.completed += t.completed;
+            total.released += t.released;
+            total.lost += t.lost;
+            total.failed += t.failed;
+        }
+        eprintln!(
+            "repose worker: {} results written, {} jobs handed back, {} lost leases, {} unreadable",
+            total.completed, total.released, total.lost, total.failed
+        );
+        Ok(ExitCode::SUCCESS)
+    })
+}
+
+/// Reads a sweep spec from TOML or JSON.
+fn read_spec(path: &PathBuf) -> anyhow::Result<Value> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let is_json =
+        path.extension().is_some_and(|e| e == "json") || text.trim_start().starts_with('{');
+    if is_json {
+        serde_json::from_str(&text).with_context(|| format!("{} is not valid JSON", path.display()))
+    } else {
+        let table: toml::Table = text
+            .parse()
+            .with_context(|| format!("{} is not valid TOML", path.display()))?;
+        Ok(serde_json::to_value(table)?)
+    }
+}
+
+async fn get_json(client: &reqwest::Client, url: &str) -> anyhow::Result<Value> {
+    let resp = client
+        .get(url)
+        .send()
+        .await
+        .with_context(|| format!("cannot reach {url}"))?;
+    let status = resp.status();
+    let body: Value = resp.json().await.unwrap_or(Value::Null);
+    if !status.is_success() {
+        bail!(
+            "{url}: {} {}",
+            status.as_u16(),
+            body["error"].as_str().unwrap_or("")
+        );
+    }
+    Ok(body)
+}
+
+pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
+    let spec = read_spec(&args.spec)?;
+    let server = args.server.trim_end_matches('/').to_string();
+    runtime()?.block_on(async {
+        let client = reqwest::Client::new();
+        let resp = client
+            .post(format!("{server}/api/sweeps"))
+            .json(&spec)
+            .send()
+            .await
+            .with_context(|| {
+                format!("cannot reach the server at {server} (is `repose serve` running?)")
+            })?;
+        let status = resp.status();
+        let body: Value = resp.json().await.unwrap_or(Value::Null);
+        if !status.is_success() {
+            eprintln!("error: the server refused the sweep ({})", status.as_u16());
+            for e in body["errors"].as_array().into_iter().flatten() {
+                eprintln!(
+                    "  {}: {}",
+                    e["field"].as_str().unwrap_or("?"),
+                    e["message"].as_str().unwrap_or("")
+                );
+            }
+            return Ok(ExitCode::from(2));
+        }
+        let id = body["id"].as_str().unwrap_or_default().to_string();
+        println!("sweep {id}: {}", body["message"].as_str().unwrap_or(""));
+        if !args.wait {
+            return Ok(ExitCode::SUCCESS);
+        }
+        let total = body["jobs"].as_u64().unwrap_or(0);
+        let bar = ProgressBar::new(total);
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} samples  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        loop {
+            let sweep = get_json(&client, &format!("{server}/api/sweeps/{id}")).await?;
+            let p = &sweep["progress"];
+            let n = |k: &str| p[k].as_u64().unwrap_or(0);
+            bar.set_position(n("done") + n("failed") + n("cancelled"));
+            let eta = sweep["eta_seconds"]
+                .as_f64()
+                .map(|s| format!("ETA {s:.0} s"))
+                .unwrap_or_default();
+            bar.set_message(format!(
+                "{} running, {} failed  {eta}",
+                n("running"),
+                n("failed")
+            ));
+            if n("queued") + n("running") == 0 {
+                bar.finish();
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(500)).await;
+        }
+        let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
+        print!("{}", points_table(&points));
+        Ok(ExitCode::SUCCESS)
+    })
+}
+
+fn points_table(points: &Value) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<40} {:>4} {:>5}  {:>16} {:>16}",
+        "point", "n", "fail", "θ_R (m3) ± sd", "θ_T ± sd"
+    );
+    for p in points["points"].as_array().into_iter().flatten() {
+        let stat = |m: &str| {
+            let a = &p["metrics"][m];
+            match (a["mean"].as_f64(), a["sd"].as_f64()) {
+                (Some(mean), Some(sd)) => format!("{mean:7.2} ± {sd:5.2}"),
+                (Some(mean), None) => format!("{mean:7.2}"),
+                _ => "-".into(),
+            }
+        };
+        let _ = writeln!(
+            s,
+            "{:<40} {:>4} {:>5}  {:>16} {:>16}",
+            p["point"].to_string(),
+            p["samples"].as_i64().unwrap_or(0),
+            p["failures"].as_i64().unwrap_or(0),
+            stat("theta_r"),
+            stat("theta_t")
+        );
+    }
+    s
+}
+
+pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
+    let server = args.server.trim_end_matches('/').to_string();
+    runtime()?.block_on(async {
+        let client = reqwest::Client::new();
+        match args.sweep {
+            None => {
+                let list = get_json(&client, &format!("{server}/api/sweeps")).await?;
+                println!(
+                    "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  name",
+                    "id", "state", "queued", "running", "done", "failed"
+                );
+                for sw in list["sweeps"].as_array().into_iter().flatten() {
+                    let p = &sw["progress"];
+                    let n = |k: &str| p[k].as_i64().unwrap_or(0);
+                    println!(
+                        "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  {}",
+                        sw["id"].as_str().unwrap_or(""),
+                        sw["state"].as_str().unwrap_or(""),
+                        n("queued"),
+                        n("running"),
+                        n("done"),
+                        n("failed"),
+                        sw["name"].as_str().unwrap_or("")
+                    );
+                }
+            }
+            Some(id) => {
+                let sweep = get_json(&client, &format!("{server}/api/sweeps/{id}")).await?;
+                println!(
+                    "{} ({}): {}",
+                    sweep["name"].as_str().unwrap_or(""),
+                    sweep["state"].as_str().unwrap_or(""),
+                    sweep["progress"]
+                );
+                let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
+                print!("{}", points_table(&points));
+            }
+        }
+        Ok(ExitCode::SUCCESS)
+    })
+}
+
+pub fn export(args: ExportArgs) -> anyhow::Result<ExitCode> {
+    let server = args.server.trim_end_matches('/').to_string();
+    runtime()?.block_on(async {
+        let url = format!(
+            "{server}/api/sweeps/{}/{}?format=csv",
+            args.sweep, args.what
+        );
+        let resp = reqwest::get(&url)
+            .await
+            .with_context(|| format!("cannot reach {url}"))?;
+        if !resp.status().is_success() {
+            let body: Value = resp.json().await.unwrap_or(Value::Null);
+            bail!(
+                "{}",
+                body["error"]
+                    .as_str()
+                    .unwrap_or("the server refused the export")
+            );
+        }
+        let text = resp.text().await?;
+        match &args.output {
+            Some(path) => std::fs::write(path, text)
+                .with_context(|| format!("cannot write {}", path.display()))?,
+            None => print!("{text}"),
+        }
+        Ok(ExitCode::SUCCESS)
+    })
+}

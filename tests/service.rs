@@ -1,0 +1,424 @@
+//! End-to-end tests of the sweep service: the real `repose` binary, real
+//! SQLite files and a real PostgreSQL server (127.0.0.1:5432, or
+//! `REPOSE_TEST_POSTGRES`). With `CI=true` the PostgreSQL tests fail when
+//! the server is unreachable; elsewhere they skip with a message.
+
+use repose_store::spec::SweepSpec;
+use repose_store::Store;
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_repose");
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "repose-e2e-{}-{}",
+        std::process::id(),
+        uuid::Uuid::new_v4()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// `repose serve` on an ephemeral port.
+struct Server {
+    child: Child,
+    url: String,
+}
+
+impl Server {
+    fn start(database: &str, workers: usize) -> Server {
+        let mut child = Command::new(BIN)
+            .args([
+                "serve",
+                "--listen",
+                "127.0.0.1:0",
+                "--database",
+                database,
+                "--workers",
+                &workers.to_string(),
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("repose serve starts");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let url = line
+            .split_whitespace()
+            .find(|w| w.starts_with("http://"))
+            .unwrap_or_else(|| panic!("no address in {line:?}"))
+            .trim_end_matches('/')
+            .to_string();
+        Server { child, url }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn worker(database: &str, extra: &[&str]) -> Child {
+    Command::new(BIN)
+        .args(["worker", "--database", database])
+        .args(extra)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("repose worker starts")
+}
+
+fn signal(child: &Child, sig: i32) {
+    unsafe {
+        libc::kill(child.id() as i32, sig);
+    }
+}
+
+async fn get(url: &str) -> Value {
+    reqwest::get(url).await.unwrap().json().await.unwrap()
+}
+
+async fn wait_until<F: Fn(&Value) -> bool>(
+    url: &str,
+    what: &str,
+    limit: Duration,
+    done: F,
+) -> Value {
+    let start = Instant::now();
+    loop {
+        let v = get(url).await;
+        if done(&v) {
+            return v;
+        }
+        assert!(start.elapsed() < limit, "timed out waiting for {what}: {v}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
+fn finished(sweep: &Value) -> bool {
+    let p = &sweep["progress"];
+    p["queued"] == 0 && p["running"] == 0
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
+    let db = format!("sqlite://{}", scratch("e2e.db").display());
+    let server = Server::start(&db, 2);
+    let spec = json!({
+        "name": "θ_R against μ, 2 × 2 box",
+        "protocol": "fill_release",
+        "base": {"box": {"width": 2.0, "height": 2.0}},
+        "axes": {"contact.mu": [0.05, 0.3]},
+        "samples": 3,
+        "fidelity": "quick"
+    });
+    let client = reqwest::Client::new();
+    let resp = client
+        .post(format!("{}/api/sweeps", server.url))
+        .json(&spec)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(resp.status(), 201);
+    let created: Value = resp.json().await.unwrap();
+    let id = created["id"].as_str().unwrap().to_string();
+    let sweep = wait_until(
+        &format!("{}/api/sweeps/{id}", server.url),
+        "the sweep",
+        Duration::from_secs(120),
+        finished,
+    )
+    .await;
+    assert_eq!(sweep["progress"]["done"], 6, "{sweep}");
+    assert_eq!(sweep["eta_seconds"], 0.0);
+
+    let samples = get(&format!("{}/api/sweeps/{id}/samples", server.url)).await;
+    let samples = samples["samples"].as_array().unwrap().clone();
+    assert_eq!(samples.len(), 6);
+    let points = get(&format!("{}/api/sweeps/{id}/points", server.url)).await;
+    let fig = get(&format!("{}/api/sweeps/{id}/figures/3", server.url)).await;
+    assert_eq!(fig["x"], "contact.mu");
+    let series = fig["points"].as_array().unwrap();
+    assert_eq!(series.len(), 2);
+    for p in points["points"].as_array().unwrap() {
+        // recompute the statistics from the stored samples
+        let values: Vec<f64> = samples
+            .iter()
+            .filter(|s| s["point"] == p["point"])
+            .filter_map(|s| s["theta_r"].as_f64())
+            .collect();
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let m = &p["metrics"]["theta_r"];
+        assert_eq!(m["n"].as_f64().unwrap(), n);
+        assert!((m["mean"].as_f64().unwrap() - mean).abs() < 1e-9, "{p}");
+        assert!((m["sd"].as_f64().unwrap() - sd).abs() < 1e-9, "{p}");
+        assert!(
+            (m["sem"].as_f64().unwrap() - sd / n.sqrt()).abs() < 1e-9,
+            "{p}"
+        );
+        let on_figure = series
+            .iter()
+            .find(|s| s["x"] == p["point"]["contact.mu"])
+            .unwrap();
+        assert_eq!(on_figure["mean"], m["mean"]);
+        assert_eq!(on_figure["sd"], m["sd"]);
+    }
+    // the physics came through: more friction, steeper pile
+    assert!(
+        series[1]["mean"].as_f64().unwrap() > series[0]["mean"].as_f64().unwrap() + 5.0,
+        "{fig}"
+    );
+    // every sample's full report is there, with its seed and engine
+    let hash = samples[0]["sample_hash"].as_str().unwrap();
+    let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
+    assert_eq!(report["seed"], samples[0]["seed"]);
+    assert!(report["final_state"]["grains"].as_array().unwrap().len() > 5);
+    // CSV exports through the CLI
+    let out = Command::new(BIN)
+        .args(["export", &id, "--what", "points", "--server", &server.url])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let csv = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    assert!(csv.starts_with("axis:contact.mu,samples,failures,theta_r_n,theta_r_mean"));
+    // Asking again reuses every sample.
+    let again: Value = client
+        .post(format!("{}/api/sweeps", server.url))
+        .json(&spec)
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(again["reused"], 6, "{again}");
+}
+
+/// Cheap jobs: one grain dropped on a floor for a few milliseconds.
+fn cheap_sweep(samples: u32) -> SweepSpec {
+    serde_json::from_value(json!({
+        "protocol": "free_run",
+        "base": {
+            "duration": 0.02,
+            "particles": [{"position": [0.0, 0.3], "radius": 0.1}],
+            "walls": [{"point": [0.0, 0.0], "normal": [0.0, 1.0]}]
+        },
+        "samples": samples
+    }))
+    .unwrap()
+}
+
+/// A fresh PostgreSQL database for one test; dropped by [`PgDatabase::drop_now`].
+struct PgDatabase {
+    url: String,
+    admin: sqlx::AnyPool,
+    name: String,
+}
+
+impl PgDatabase {
+    async fn drop_now(self, store: Store) {
+        store.pool().close().await;
+        let _ = sqlx::query(&format!("DROP DATABASE {} WITH (FORCE)", self.name))
+            .execute(&self.admin)
+            .await;
+    }
+}
+
+async fn postgres() -> Option<PgDatabase> {
+    let server = std::env::var("REPOSE_TEST_POSTGRES")
+        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
+    sqlx::any::install_default_drivers();
+    match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
+        Ok(admin) => {
+            let name = format!("repose_e2e_{}", uuid::Uuid::new_v4().simple());
+            sqlx::query(&format!("CREATE DATABASE {name}"))
+                .execute(&admin)
+                .await
+                .unwrap();
+            Some(PgDatabase {
+                url: format!("{server}/{name}"),
+                admin,
+                name,
+            })
+        }
+        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
+            eprintln!("skipping: no PostgreSQL ({e})");
+            None
+        }
+        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    }
+}
+
+async fn assert_every_job_done_once(
+    store: &Store,
+    sweep: &str,
+    jobs: &[repose_store::spec::JobSpec],
+) {
+    let p = store.progress(sweep).await.unwrap();
+    assert_eq!(
+        (p.done, p.queued, p.running, p.failed),
+        (jobs.len() as i64, 0, 0, 0),
+        "{p:?}"
+    );
+    for j in jobs {
+        assert_eq!(store.result_count(&j.sample_hash).await.unwrap(), 1);
+    }
+    let total: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(total, jobs.len() as i64);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn worker_processes_on_postgres_do_every_job_exactly_once() {
+    let Some(db) = postgres().await else { return };
+    let url = db.url.clone();
+    let store = Store::open(&url).await.unwrap();
+    let spec = cheap_sweep(60);
+    let jobs = spec.expand().unwrap();
+    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    let workers: Vec<Child> = (0..4)
+        .map(|_| worker(&url, &["--exit-when-idle"]))
+        .collect();
+    for w in workers {
+        let out = w.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert_every_job_done_once(&store, &created.id, &jobs).await;
+    // the work was shared
+    let owners: i64 = sqlx::query_scalar("SELECT COUNT(DISTINCT job_id) FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(owners, 60);
+    db.drop_now(store).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
+    let url = format!("sqlite://{}", scratch("busy.db").display());
+    let store = Store::open(&url).await.unwrap();
+    let spec = cheap_sweep(120);
+    let jobs = spec.expand().unwrap();
+    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    let workers: Vec<Child> = (0..4)
+        .map(|_| worker(&url, &["--exit-when-idle"]))
+        .collect();
+    for w in workers {
+        let out = w.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(!stderr.contains("locked"), "{stderr}");
+    }
+    assert_every_job_done_once(&store, &created.id, &jobs).await;
+}
+
+/// One real pile (about two seconds of work) on the given database.
+async fn one_long_job(url: &str) -> (Store, String, Vec<repose_store::spec::JobSpec>) {
+    let store = Store::open(url).await.unwrap();
+    let spec: SweepSpec =
+        serde_json::from_value(json!({"protocol": "fill_release", "samples": 1})).unwrap();
+    let jobs = spec.expand().unwrap();
+    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    (store, created.id, jobs)
+}
+
+async fn wait_running(store: &Store, sweep: &str) {
+    let start = Instant::now();
+    while store.progress(sweep).await.unwrap().running == 0 {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the job never started"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
+    let Some(db) = postgres().await else { return };
+    let url = db.url.clone();
+    let (store, sweep, jobs) = one_long_job(&url).await;
+    let mut doomed = worker(&url, &["--lease", "1.5", "--heartbeat", "0.3"]);
+    wait_running(&store, &sweep).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    signal(&doomed, libc::SIGKILL);
+    doomed.wait().unwrap();
+    let rescuer = worker(&url, &["--lease", "1.5", "--heartbeat", "0.3"]);
+    let start = Instant::now();
+    while store.progress(&sweep).await.unwrap().done == 0 {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the job was never finished"
+        );
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    signal(&rescuer, libc::SIGTERM);
+    let out = rescuer.wait_with_output().unwrap();
+    assert!(out.status.success());
+    assert_every_job_done_once(&store, &sweep, &jobs).await;
+    let attempts: i64 = sqlx::query_scalar("SELECT attempts FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(attempts, 2, "the first attempt died with its worker");
+    db.drop_now(store).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sigterm_hands_the_running_job_back_unwritten() {
+    let url = format!("sqlite://{}", scratch("term.db").display());
+    let (store, sweep, _) = one_long_job(&url).await;
+    let w = worker(&url, &[]);
+    wait_running(&store, &sweep).await;
+    signal(&w, libc::SIGTERM);
+    let out = w.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("1 jobs handed back"), "{stderr}");
+    let p = store.progress(&sweep).await.unwrap();
+    assert_eq!((p.queued, p.running, p.done), (1, 0, 0));
+    let results: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(results, 0);
+    let attempts: i64 = sqlx::query_scalar("SELECT attempts FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(attempts, 0, "a handed-back job does not use up an attempt");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn submit_refuses_a_bad_spec_naming_the_field() {
+    let db = format!("sqlite://{}", scratch("submit.db").display());
+    let server = Server::start(&db, 0);
+    let spec = scratch("bad.toml");
+    std::fs::write(
+        &spec,
+        "protocol = \"tilt\"\n[axes]\n\"contact.mu\" = [0.2, -0.5]\n",
+    )
+    .unwrap();
+    let out = Command::new(BIN)
+        .args(["submit", spec.to_str().unwrap(), "--server", &server.url])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("axes.contact.mu"), "{stderr}");
+}
