@@ -32,6 +32,7 @@ CREATE TABLE jobs (
 
 CREATE INDEX jobs_by_state ON jobs (state, sweep_id, seq);
 CREATE INDEX jobs_by_hash ON jobs (sample_hash);
+CREATE INDEX jobs_by_sweep ON jobs (sweep_id, seq);
 
 -- Exactly one result per sample, whichever sweep asked for it.
 CREATE TABLE results (

@@ -11,6 +11,7 @@
 //! ```
 
 mod bench;
+mod bench_service;
 mod output;
 mod service;
 
@@ -40,6 +41,8 @@ enum Command {
     Run(RunArgs),
     /// Measure engine throughput (particle-steps per second, single thread).
     Bench(bench::BenchArgs),
+    /// Measure the service: queue overhead, query latency, worker speed-up.
+    BenchService(bench_service::BenchServiceArgs),
     /// Run the API and embedded workers (SQLite file by default).
     Serve(service::ServeArgs),
     /// Run headless workers against a shared database (cluster nodes).
@@ -84,6 +87,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run(args),
         Command::Bench(args) => bench::run(args),
+        Command::BenchService(args) => bench_service::run_bench(args),
         Command::Serve(args) => service::serve(args),
         Command::Worker(args) => service::worker(args),
         Command::Submit(args) => service::submit(args),

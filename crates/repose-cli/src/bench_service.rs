@@ -1,0 +1,262 @@
+//! `repose bench-service`: what the service itself costs.
+//!
+//! 1. Queue overhead: claim + complete of no-op jobs per second, with
+//!    several claimers at once, on SQLite and on PostgreSQL.
+//! 2. Query latency: the points and figure queries over a sweep of
+//!    100 000 stored samples (the rows are bulk-loaded; only the queries
+//!    are timed).
+//! 3. End-to-end speed-up of a real sweep with one worker against two.
+
+use anyhow::Context;
+use repose_physics::{run, Quiet, RunReport, Scene};
+use repose_store::spec::SweepSpec;
+use repose_store::{now_ms, Backend, Store};
+use repose_worker::{run_worker, WorkerConfig};
+use serde_json::json;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args)]
+pub struct BenchServiceArgs {
+    /// PostgreSQL server to measure too (a scratch database is created and dropped).
+    #[arg(long, default_value = "postgres://postgres@127.0.0.1:5432")]
+    postgres: String,
+    /// Skip PostgreSQL.
+    #[arg(long)]
+    no_postgres: bool,
+    /// No-op jobs for the queue measurement.
+    #[arg(long, default_value_t = 2000)]
+    jobs: u32,
+    /// Concurrent claimers.
+    #[arg(long, default_value_t = 4)]
+    claimers: usize,
+    /// Stored samples for the query measurement.
+    #[arg(long, default_value_t = 100_000)]
+    samples: usize,
+    /// Samples of the end-to-end sweep.
+    #[arg(long, default_value_t = 8)]
+    sweep_samples: u32,
+}
+
+fn tiny_report() -> RunReport {
+    let scene = Scene::from_toml(
+        "protocol = \"free_run\"\nduration = 0.0001\n[[particles]]\nposition = [0.0, 0.0]\nradius = 0.1",
+        &[],
+    )
+    .expect("a valid scene");
+    let mut r = run(&scene, &mut Quiet).expect("runs");
+    r.final_state = None;
+    r.energy_trace.clear();
+    r
+}
+
+fn noop_sweep(samples: u32) -> SweepSpec {
+    serde_json::from_value(json!({
+        "protocol": "free_run",
+        "base": { "duration": 0.0001, "particles": [{"position": [0.0, 0.0], "radius": 0.1}] },
+        "samples": samples
+    }))
+    .expect("a valid sweep")
+}
+
+/// Claim + complete throughput with `claimers` concurrent tasks.
+async fn queue_overhead(store: &Store, jobs: u32, claimers: usize) -> anyhow::Result<f64> {
+    let spec = noop_sweep(jobs);
+    let expanded = spec.expand()?;
+    store.create_sweep(&spec, &expanded, 3).await?;
+    let report = tiny_report();
+    let clock = Instant::now();
+    let mut tasks = Vec::new();
+    for k in 0..claimers {
+        let store = store.clone();
+        let report = report.clone();
+        tasks.push(tokio::spawn(async move {
+            let owner = format!("bench-{k}");
+            let mut n = 0u32;
+            while let Some(c) = store.claim(&owner, Duration::from_secs(60)).await? {
+                store
+                    .complete(&c.job_id, &owner, &c.sample_hash, &report)
+                    .await?;
+                n += 1;
+            }
+            Ok::<_, repose_store::StoreError>(n)
+        }));
+    }
+    let mut done = 0;
+    for t in tasks {
+        done += t.await??;
+    }
+    anyhow::ensure!(done == jobs, "{done} of {jobs} jobs done");
+    Ok(jobs as f64 / clock.elapsed().as_secs_f64())
+}
+
+/// Bulk-loads a sweep of `samples` results over 100 points (10 μ × 10 W)
+/// with plausible angles; returns the sweep id.
+async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
+    let id = uuid::Uuid::new_v4().to_string();
+    let now = now_ms();
+    let spec =
+        json!({"protocol": "fill_release", "axes": {"contact.mu": [0.0], "box.width": [0.0]}});
+    sqlx::query(&format!(
+        "INSERT INTO sweeps (id, name, protocol, spec, priority, state, created_at) \
+         VALUES ('{id}', 'benchmark', 'fill_release', '{spec}', 0, 'active', {now})"
+    ))
+    .execute(store.pool())
+    .await?;
+    let per_point = samples.div_ceil(100);
+    let batch = 250;
+    let mut tx = store.pool().begin().await?;
+    let (mut jobs, mut results) = (Vec::with_capacity(batch), Vec::with_capacity(batch));
+    for k in 0..samples {
+        let point = k / per_point;
+        let (mu, width) = (0.05 * (point % 10) as f64, 1.0 + (point / 10) as f64);
+        let seed = (k % per_point) as i64;
+        let hash = format!("{id}-{k}");
+        let theta = 10.0 + 60.0 * mu + ((k * 7919) % 1000) as f64 / 250.0;
+        jobs.push(format!(
+            "('{id}-j{k}', '{id}', {k}, '{{\"box.width\":{width},\"contact.mu\":{mu}}}', {seed}, {seed}, '{hash}', '{{}}', 'done', 1, 3, {now}, {now})"
+        ));
+        results.push(format!(
+            "('{hash}', '{id}-j{k}', 'bench', {seed}, 'completed', NULL, {a}, {b}, {theta}, {t}, NULL, NULL, NULL, 400, 100, 300, 150000, 2.0, 1.5, '{{}}', {now})",
+            a = theta + 2.0,
+            b = theta + 1.0,
+            t = 4.0 + mu
+        ));
+        if jobs.len() == batch || k + 1 == samples {
+            sqlx::query(&format!(
+                "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, created_at, updated_at) VALUES {}",
+                jobs.join(",")
+            ))
+            .execute(&mut *tx)
+            .await?;
+            sqlx::query(&format!(
+                "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, theta_r_endpoints, theta_r_line, theta_r, \
+                 theta_t, theta_ms_mean, theta_ms_sd, theta_ms_max, grains_initial, grains_final, grains_lost, iterations, \
+                 simulated_time, wall_time, report, created_at) VALUES {}",
+                results.join(",")
+            ))
+            .execute(&mut *tx)
+            .await?;
+            jobs.clear();
+            results.clear();
+        }
+    }
+    tx.commit().await?;
+    Ok(id)
+}
+
+/// Median and fastest of five timings of `f`, in milliseconds.
+async fn time_ms<F, Fut, T>(mut f: F) -> anyhow::Result<(f64, f64)>
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = anyhow::Result<T>>,
+{
+    let mut times = Vec::new();
+    for _ in 0..5 {
+        let clock = Instant::now();
+        f().await?;
+        times.push(clock.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((times[2], times[0]))
+}
+
+async fn measure(label: &str, store: &Store, args: &BenchServiceArgs) -> anyhow::Result<()> {
+    let rate = queue_overhead(store, args.jobs, args.claimers).await?;
+    println!(
+        "{label:<10} queue: {rate:8.0} claim+complete per second ({} no-op jobs, {} claimers)",
+        args.jobs, args.claimers
+    );
+    let clock = Instant::now();
+    let sweep = load_samples(store, args.samples).await?;
+    let load = clock.elapsed().as_secs_f64();
+    let (points_med, points_min) = time_ms(|| async { Ok(store.points(&sweep).await?) }).await?;
+    let (fig_med, fig_min) = time_ms(|| async {
+        let points = store.points(&sweep).await?;
+        Ok(repose_store::series(
+            &points,
+            "contact.mu",
+            Some("box.width"),
+            "theta_r",
+        )?)
+    })
+    .await?;
+    let n = store.points(&sweep).await?.len();
+    println!(
+        "{label:<10} query over {} samples ({n} points; loaded in {load:.1} s): points {points_med:.1} ms (min {points_min:.1}), figure series {fig_med:.1} ms (min {fig_min:.1})",
+        args.samples
+    );
+    Ok(())
+}
+
+async fn sweep_time(workers: usize, samples: u32) -> anyhow::Result<f64> {
+    let dir = std::env::temp_dir().join(format!(
+        "repose-bench-{}-{}",
+        std::process::id(),
+        uuid::Uuid::new_v4()
+    ));
+    std::fs::create_dir_all(&dir)?;
+    let store = Store::open(&format!("sqlite://{}", dir.join("e2e.db").display())).await?;
+    let spec: SweepSpec = serde_json::from_value(json!({
+        "protocol": "fill_release",
+        "base": {"box": {"width": 2.0, "height": 2.0}},
+        "samples": samples,
+        "fidelity": "standard"
+    }))?;
+    store.create_sweep(&spec, &spec.expand()?, 3).await?;
+    let (_tx, rx) = tokio::sync::watch::channel(false);
+    let clock = Instant::now();
+    let tasks: Vec<_> = (0..workers)
+        .map(|k| {
+            let mut config = WorkerConfig::new(format!("bench-{k}"));
+            config.exit_when_idle = true;
+            tokio::spawn(run_worker(store.clone(), config, rx.clone()))
+        })
+        .collect();
+    let mut done = 0;
+    for t in tasks {
+        done += t.await?.completed;
+    }
+    anyhow::ensure!(done == samples as u64, "{done} of {samples} samples done");
+    let _ = std::fs::remove_dir_all(dir);
+    Ok(clock.elapsed().as_secs_f64())
+}
+
+pub fn run_bench(args: BenchServiceArgs) -> anyhow::Result<ExitCode> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?;
+    rt.block_on(async {
+        let dir = std::env::temp_dir().join(format!("repose-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let sqlite = Store::open(&format!("sqlite://{}", dir.join("queue.db").display())).await?;
+        measure("SQLite", &sqlite, &args).await?;
+        drop(sqlite);
+        let _ = std::fs::remove_dir_all(&dir);
+
+        if !args.no_postgres {
+            sqlx::any::install_default_drivers();
+            let server = args.postgres.trim_end_matches('/');
+            let admin = sqlx::AnyPool::connect(&format!("{server}/postgres"))
+                .await
+                .with_context(|| format!("cannot reach PostgreSQL at {server} (use --no-postgres to skip)"))?;
+            let name = format!("repose_bench_{}", uuid::Uuid::new_v4().simple());
+            sqlx::query(&format!("CREATE DATABASE {name}")).execute(&admin).await?;
+            let pg = Store::open(&format!("{server}/{name}")).await?;
+            assert_eq!(pg.backend(), Backend::Postgres);
+            let result = measure("PostgreSQL", &pg, &args).await;
+            pg.pool().close().await;
+            sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)")).execute(&admin).await?;
+            result?;
+        }
+
+        let one = sweep_time(1, args.sweep_samples).await?;
+        let two = sweep_time(2, args.sweep_samples).await?;
+        println!(
+            "sweep      {} fill-and-release samples (2 × 2 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
+            args.sweep_samples,
+            one / two
+        );
+        Ok(ExitCode::SUCCESS)
+    })
+}
