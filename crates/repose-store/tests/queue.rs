@@ -76,10 +76,10 @@ where
         let pool = store.pool().clone();
         test(store).await;
         pool.close().await;
-        sqlx::query(&format!("DROP DATABASE {name}"))
+        // Best-effort clean-up; FORCE ends sessions the pool has not closed yet.
+        let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
             .execute(&admin)
-            .await
-            .unwrap();
+            .await;
     }
 }
 
