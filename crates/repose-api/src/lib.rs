@@ -40,6 +40,7 @@ pub struct AppState {
 pub fn app(store: Store) -> Router {
     Router::new()
         .route("/", get(index))
+        .route("/static/{file}", get(static_file))
         .route("/api/health", get(health))
         .route("/api/openapi.json", get(openapi))
         .route("/api/sweeps", get(list_sweeps).post(create_sweep))
@@ -115,13 +116,42 @@ impl IntoResponse for ApiError {
 
 type ApiResult<T> = Result<T, ApiError>;
 
+/// The results browser (`web/`), compiled into the binary so a server needs
+/// no files beside it and the page fetches nothing from elsewhere.
+const WEB: &[(&str, &str, &str)] = &[
+    (
+        "app.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../../web/app.js"),
+    ),
+    (
+        "plot.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../../web/plot.js"),
+    ),
+    (
+        "style.css",
+        "text/css; charset=utf-8",
+        include_str!("../../../web/style.css"),
+    ),
+];
+
 async fn index() -> Html<&'static str> {
-    Html(concat!(
-        "<!doctype html><meta charset=utf-8><title>repose</title>",
-        "<h1>repose</h1><p>The sweep service is running. ",
-        "API: <a href=\"/api/sweeps\">/api/sweeps</a>, ",
-        "<a href=\"/api/openapi.json\">/api/openapi.json</a>.</p>"
-    ))
+    Html(include_str!("../../../web/index.html"))
+}
+
+async fn static_file(Path(file): Path<String>) -> Response {
+    match WEB.iter().find(|(name, _, _)| *name == file) {
+        Some((_, kind, body)) => (
+            [
+                (header::CONTENT_TYPE, *kind),
+                (header::CACHE_CONTROL, "no-cache"),
+            ],
+            *body,
+        )
+            .into_response(),
+        None => ApiError::new(StatusCode::NOT_FOUND, format!("no file `{file}`")).into_response(),
+    }
 }
 
 async fn health(State(s): State<AppState>) -> ApiResult<Json<Value>> {

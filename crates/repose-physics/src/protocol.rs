@@ -454,15 +454,19 @@ impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
             });
             let r = stream.radius(&self.scene.grains);
             let p = &self.sim.particles;
-            let corner = 4.0 * p.mean_radius();
+            // The upper-left corner: a random spot within one mean diameter of
+            // the left wall, just above the grains there. Dropping every grain
+            // at the same x would stack them into a column along the wall.
+            let diameter = 2.0 * p.mean_radius();
+            let x = r * 1.01 + diameter * stream.uniform();
             let top = p
                 .pos
                 .iter()
                 .zip(&p.radius)
-                .filter(|(x, _)| x.x < corner)
-                .map(|(x, a)| x.y + a)
+                .filter(|(c, a)| (c.x - x).abs() < r + **a)
+                .map(|(c, a)| c.y + a)
                 .fold(0.0, f64::max);
-            let pos = Vector::<2>::new(r * 1.01, top + r * 1.1);
+            let pos = Vector::<2>::new(x, top + r * 1.1);
             self.sim.insert(
                 pos,
                 Vector::zeros(),

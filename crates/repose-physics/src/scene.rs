@@ -433,12 +433,19 @@ const MAX_PACKING: f64 = 0.9;
 pub const MAX_GRAINS: usize = 1_000_000;
 
 impl Scene {
-    /// Parses a TOML document, applies `key=value` overrides (dotted keys,
-    /// TOML values; a bare word is taken as a string) and validates.
+    /// Parses a TOML document — or a JSON one (text starting with `{`, as
+    /// results store their scenes) — applies `key=value` overrides (dotted
+    /// keys, TOML values; a bare word is taken as a string) and validates.
     pub fn from_toml(text: &str, overrides: &[String]) -> Result<Scene, SceneError> {
-        let mut doc: toml::Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| SceneError::single("(document)", e.to_string()))?;
+        let mut doc: toml::Table = if text.trim_start().starts_with('{') {
+            let json: serde_json::Value = serde_json::from_str(text)
+                .map_err(|e| SceneError::single("(document)", format!("not valid JSON: {e}")))?;
+            toml::Table::try_from(drop_nulls(json))
+                .map_err(|e| SceneError::single("(document)", e.to_string()))?
+        } else {
+            text.parse()
+                .map_err(|e: toml::de::Error| SceneError::single("(document)", e.to_string()))?
+        };
         for o in overrides {
             apply_override(&mut doc, o)?;
         }
@@ -776,6 +783,22 @@ impl Scene {
     }
 }
 
+/// JSON `null` means "not set"; TOML has no null, so such keys are dropped.
+fn drop_nulls(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(m) => serde_json::Value::Object(
+            m.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, drop_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(a) => {
+            serde_json::Value::Array(a.into_iter().map(drop_nulls).collect())
+        }
+        other => other,
+    }
+}
+
 fn path_error(path: String, message: String) -> SceneError {
     let field = if path.is_empty() || path == "." {
         "(document)".to_string()
@@ -892,6 +915,18 @@ mod tests {
         assert_eq!(err.errors[0].field, "contact.mu");
         let err = Scene::from_toml("protocol = \"sideways\"", &[]).unwrap_err();
         assert_eq!(err.errors[0].field, "protocol");
+    }
+
+    #[test]
+    fn a_resolved_scene_stored_as_json_reads_back_the_same() {
+        let s = Scene::from_toml("protocol = \"tilt\"\nseed = 7", &[])
+            .unwrap()
+            .resolved();
+        let text = serde_json::to_string_pretty(&s).unwrap();
+        let back = Scene::from_toml(&text, &[]).unwrap();
+        assert_eq!(back, s);
+        let changed = Scene::from_toml(&text, &["contact.mu=0.3".into()]).unwrap();
+        assert_eq!(changed.contact.mu, 0.3);
     }
 
     #[test]

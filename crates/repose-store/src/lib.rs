@@ -829,28 +829,28 @@ pub struct Figure {
 pub const FIGURES: &[Figure] = &[
     Figure {
         name: "2a",
-        title: "θ_R against the box height H (W = 2, μ = 0.2)",
+        title: "θ_R against the box height H (paper: W = 2, μ = 0.2)",
         x: "box.height",
         series: None,
         y: "theta_r",
     },
     Figure {
         name: "2b",
-        title: "θ_R against the box width W for several μ (H/W = 2)",
+        title: "θ_R against the box width W for several μ (paper: H/W = 2)",
         x: "box.width",
         series: Some("contact.mu"),
         y: "theta_r",
     },
     Figure {
         name: "3",
-        title: "θ_R against μ (W = H = 4)",
+        title: "θ_R against μ (paper: W = H = 4)",
         x: "contact.mu",
         series: None,
         y: "theta_r",
     },
     Figure {
         name: "4",
-        title: "θ_T against μ (W = H = 4)",
+        title: "θ_T against μ (paper: W = H = 4)",
         x: "contact.mu",
         series: None,
         y: "theta_t",
