@@ -267,8 +267,35 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "samples": 1,
         "fidelity": "quick"
     });
-    let (id, hash, grains, flux_hash) = rt.block_on(async {
+    let tilt = json!({
+        "protocol": "tilt",
+        "base": {"box": {"width": 2.0, "height": 2.0}},
+        "axes": {"contact.mu": [0.15, 0.3]},
+        "samples": 2,
+        "fidelity": "quick"
+    });
+    let widths = json!({
+        "protocol": "fill_release",
+        "base": {"box": {"aspect": 1.0}},
+        "axes": {"box.width": [1.5, 2.0], "contact.mu": [0.1, 0.3]},
+        "samples": 1,
+        "fidelity": "quick"
+    });
+    let (id, hash, grains, flux_hash, tilt_id, widths_id) = rt.block_on(async {
         let client = reqwest::Client::new();
+        let mut extra = Vec::new();
+        for spec in [&tilt, &widths] {
+            let created: Value = client
+                .post(format!("{}/api/sweeps", server.url))
+                .json(spec)
+                .send()
+                .await
+                .unwrap()
+                .json()
+                .await
+                .unwrap();
+            extra.push(created["id"].as_str().unwrap().to_string());
+        }
         let flux: Value = client
             .post(format!("{}/api/sweeps", server.url))
             .json(&flux)
@@ -351,7 +378,34 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
             .as_str()
             .unwrap()
             .to_string();
-        (id, hash, grains, flux_hash)
+        for sweep in &extra {
+            loop {
+                let s: Value = client
+                    .get(format!("{}/api/sweeps/{sweep}", server.url))
+                    .send()
+                    .await
+                    .unwrap()
+                    .json()
+                    .await
+                    .unwrap();
+                if s["progress"]["queued"] == 0 && s["progress"]["running"] == 0 {
+                    break;
+                }
+                assert!(
+                    start.elapsed() < Duration::from_secs(180),
+                    "sweep did not finish: {s}"
+                );
+                tokio::time::sleep(Duration::from_millis(200)).await;
+            }
+        }
+        (
+            id,
+            hash,
+            grains,
+            flux_hash,
+            extra[0].clone(),
+            extra[1].clone(),
+        )
     });
 
     let mut tab = Page::launch(&chrome);
@@ -405,6 +459,24 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     );
     assert!(title.as_str().unwrap().contains("n = 2"), "{title}");
     tab.screenshot("figure3.png");
+
+    // Figure 4 (θ_T) with eq. (4) from the same piles, and figure 2b with one series per μ.
+    open(&mut tab, &format!("/sweep/{tilt_id}/figure/4"));
+    wait_for(
+        &mut tab,
+        "figure 4",
+        "document.querySelectorAll('#figure-plot svg circle.mean').length === 2",
+    );
+    assert_eq!(count(&mut tab, "#figure-plot svg polyline.theory"), 1);
+    tab.screenshot("figure4.png");
+    open(&mut tab, &format!("/sweep/{widths_id}/figure/2b"));
+    wait_for(
+        &mut tab,
+        "figure 2b",
+        "document.querySelectorAll('#figure-plot svg circle.mean').length === 4",
+    );
+    assert_eq!(count(&mut tab, "#figure-plot svg g.series"), 2);
+    tab.screenshot("figure2b.png");
 
     // 4. A sample page draws every grain, force chains, the surface and the energy trace.
     open(&mut tab, &format!("/sample/{hash}"));

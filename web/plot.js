@@ -49,8 +49,9 @@ function hideTip() {
 }
 
 // A frame with axes; returns {svg, x(), y(), plot group}.
-function frame({ width = 720, height = 440, xRange, yRange, xLabel, yLabel, title }) {
-  const m = { left: 64, right: 20, top: title ? 34 : 16, bottom: 52 };
+function frame({ width = 720, height = 440, xRange, yRange, xLabel, yLabel, title, legendWidth = 0 }) {
+  width += legendWidth;
+  const m = { left: 64, right: 20 + legendWidth, top: title ? 34 : 16, bottom: 52 };
   const svg = el("svg", {
     xmlns: SVGNS, width, height, viewBox: `0 0 ${width} ${height}`,
     role: "img", "aria-label": title || `${yLabel} against ${xLabel}`,
@@ -112,7 +113,10 @@ function errorBarPlot({ series, theory = [], errors = "sd", xLabel, yLabel, titl
   for (const t of theory) for (const p of t.points) { xs.push(p.x); ys.push(p.y); }
   let yRange = extent(ys);
   if (yFloor !== null) yRange[0] = Math.min(yRange[0], yFloor);
-  const f = frame({ xRange: extent(xs), yRange, xLabel, yLabel, title });
+  const items = series.filter(s => s.name).map((s, k) => ({ name: s.name, colour: PALETTE[k % PALETTE.length], dash: null }))
+    .concat(theory.map((t, k) => ({ name: t.name, colour: "#333", dash: k ? "2 3" : "6 4" })));
+  const legendWidth = items.length ? 40 + 7.2 * Math.max(...items.map(it => it.name.length)) : 0;
+  const f = frame({ xRange: extent(xs), yRange, xLabel, yLabel, title, legendWidth });
   series.forEach((s, k) => {
     const colour = PALETTE[k % PALETTE.length];
     const g = el("g", { class: "series", "data-series": s.name || "" }, f.plot);
@@ -144,11 +148,9 @@ function errorBarPlot({ series, theory = [], errors = "sd", xLabel, yLabel, titl
     const pts = t.points.filter(p => Number.isFinite(p.y)).map(p => `${f.x(p.x)},${f.y(p.y)}`);
     el("polyline", { points: pts.join(" "), fill: "none", stroke: "#333", "stroke-dasharray": k ? "2 3" : "6 4", "stroke-width": "1.5", class: "theory" }, f.plot);
   });
-  // legend
-  const items = series.filter(s => s.name).map((s, k) => ({ name: s.name, colour: PALETTE[k % PALETTE.length], dash: null }))
-    .concat(theory.map((t, k) => ({ name: t.name, colour: "#333", dash: k ? "2 3" : "6 4" })));
+  // legend, to the right of the plot area
   items.forEach((it, k) => {
-    const yy = f.m.top + 12 + 18 * k, xx = f.m.left + f.pw - 210;
+    const yy = f.m.top + 12 + 18 * k, xx = f.m.left + f.pw + 16;
     if (it.dash) el("line", { x1: xx, y1: yy - 4, x2: xx + 22, y2: yy - 4, stroke: it.colour, "stroke-dasharray": it.dash, "stroke-width": "1.5" }, f.svg);
     else el("circle", { cx: xx + 11, cy: yy - 4, r: 5, fill: it.colour }, f.svg);
     el("text", { x: xx + 30, y: yy, fill: "#1d2330" }, f.svg).textContent = it.name;
