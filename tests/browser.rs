@@ -18,48 +18,13 @@ use std::time::{Duration, Instant};
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
 
-const BIN: &str = env!("CARGO_BIN_EXE_repose");
+#[path = "common/mod.rs"]
+mod common;
 
-struct Server {
-    child: Child,
-    url: String,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{scratch, Server};
 
 fn start_server() -> Server {
-    let dir = std::env::temp_dir().join(format!("repose-browser-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let db = format!("sqlite://{}", dir.join("page.db").display());
-    let mut child = Command::new(BIN)
-        .args([
-            "serve",
-            "--listen",
-            "127.0.0.1:0",
-            "--database",
-            &db,
-            "--workers",
-            "2",
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .expect("repose serve starts");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let url = line
-        .split_whitespace()
-        .find(|w| w.starts_with("http://"))
-        .expect("the server prints its address")
-        .trim_end_matches('/')
-        .to_string();
-    Server { child, url }
+    Server::start(&format!("sqlite://{}", scratch("page.db").display()), 2)
 }
 
 fn chromium() -> Option<PathBuf> {

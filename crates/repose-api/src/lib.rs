@@ -302,6 +302,20 @@ async fn require_sweep(store: &Store, id: &str) -> ApiResult<()> {
     }
 }
 
+/// A listing as JSON (`{key: rows}`) or, with `?format=csv`, as a CSV download.
+fn listing<T: serde::Serialize>(
+    format: Format,
+    key: &str,
+    file: String,
+    rows: &[T],
+    csv: fn(&[T]) -> String,
+) -> Response {
+    match format {
+        Format::Json => Json(json!({ key: rows })).into_response(),
+        Format::Csv => csv_response(&file, csv(rows)),
+    }
+}
+
 async fn samples(
     State(s): State<AppState>,
     Path(id): Path<String>,
@@ -309,14 +323,14 @@ async fn samples(
 ) -> ApiResult<Response> {
     let format = format_of(&q)?;
     require_sweep(&s.store, &id).await?;
-    let samples = s.store.samples(&id).await?;
-    Ok(match format {
-        Format::Json => Json(json!({ "samples": samples })).into_response(),
-        Format::Csv => csv_response(
-            &format!("samples-{id}.csv"),
-            repose_store::export::samples_csv(&samples),
-        ),
-    })
+    let rows = s.store.samples(&id).await?;
+    Ok(listing(
+        format,
+        "samples",
+        format!("samples-{id}.csv"),
+        &rows,
+        repose_store::export::samples_csv,
+    ))
 }
 
 async fn points(
@@ -326,14 +340,14 @@ async fn points(
 ) -> ApiResult<Response> {
     let format = format_of(&q)?;
     require_sweep(&s.store, &id).await?;
-    let points = s.store.points(&id).await?;
-    Ok(match format {
-        Format::Json => Json(json!({ "points": points })).into_response(),
-        Format::Csv => csv_response(
-            &format!("points-{id}.csv"),
-            repose_store::export::points_csv(&points),
-        ),
-    })
+    let rows = s.store.points(&id).await?;
+    Ok(listing(
+        format,
+        "points",
+        format!("points-{id}.csv"),
+        &rows,
+        repose_store::export::points_csv,
+    ))
 }
 
 #[derive(Deserialize)]
