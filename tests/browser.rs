@@ -21,7 +21,7 @@ use tungstenite::{Message, WebSocket};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{scratch, Server};
+use common::{get, run_sweep, scratch, Server};
 
 fn start_server() -> Server {
     Server::start(&format!("sqlite://{}", scratch("page.db").display()), 2)
@@ -247,130 +247,25 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "fidelity": "quick"
     });
     let (id, hash, grains, flux_hash, tilt_id, widths_id) = rt.block_on(async {
-        let client = reqwest::Client::new();
-        let mut extra = Vec::new();
-        for spec in [&tilt, &widths] {
-            let created: Value = client
-                .post(format!("{}/api/sweeps", server.url))
-                .json(spec)
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
-            extra.push(created["id"].as_str().unwrap().to_string());
-        }
-        let flux: Value = client
-            .post(format!("{}/api/sweeps", server.url))
-            .json(&flux)
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
-        let flux_id = flux["id"].as_str().unwrap().to_string();
-        let created: Value = client
-            .post(format!("{}/api/sweeps", server.url))
-            .json(&spec)
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
-        let id = created["id"].as_str().unwrap().to_string();
-        let start = Instant::now();
-        loop {
-            let s: Value = client
-                .get(format!("{}/api/sweeps/{id}", server.url))
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
-            if s["progress"]["done"] == 4 {
-                break;
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(120),
-                "sweep did not finish: {s}"
-            );
-            tokio::time::sleep(Duration::from_millis(200)).await;
-        }
-        let samples: Value = client
-            .get(format!("{}/api/sweeps/{id}/samples", server.url))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
-        let hash = samples["samples"][0]["sample_hash"]
-            .as_str()
-            .unwrap()
-            .to_string();
-        let report: Value = client
-            .get(format!("{}/api/samples/{hash}", server.url))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
-        let grains = report["final_state"]["grains"].as_array().unwrap().len() as u64;
-        let flux_samples = loop {
-            let s: Value = client
-                .get(format!("{}/api/sweeps/{flux_id}/samples", server.url))
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
-            if s["samples"].as_array().is_some_and(|a| !a.is_empty()) {
-                break s;
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(120),
-                "flux sample did not finish"
-            );
-            tokio::time::sleep(Duration::from_millis(200)).await;
-        };
-        let flux_hash = flux_samples["samples"][0]["sample_hash"]
-            .as_str()
-            .unwrap()
-            .to_string();
-        for sweep in &extra {
-            loop {
-                let s: Value = client
-                    .get(format!("{}/api/sweeps/{sweep}", server.url))
-                    .send()
-                    .await
+        let id = run_sweep(&server, &spec).await;
+        let flux_id = run_sweep(&server, &flux).await;
+        let tilt_id = run_sweep(&server, &tilt).await;
+        let widths_id = run_sweep(&server, &widths).await;
+        let first_sample = |sweep: String| {
+            let url = server.url.clone();
+            async move {
+                let samples = get(&format!("{url}/api/sweeps/{sweep}/samples")).await;
+                samples["samples"][0]["sample_hash"]
+                    .as_str()
                     .unwrap()
-                    .json()
-                    .await
-                    .unwrap();
-                if s["progress"]["queued"] == 0 && s["progress"]["running"] == 0 {
-                    break;
-                }
-                assert!(
-                    start.elapsed() < Duration::from_secs(180),
-                    "sweep did not finish: {s}"
-                );
-                tokio::time::sleep(Duration::from_millis(200)).await;
+                    .to_string()
             }
-        }
-        (
-            id,
-            hash,
-            grains,
-            flux_hash,
-            extra[0].clone(),
-            extra[1].clone(),
-        )
+        };
+        let hash = first_sample(id.clone()).await;
+        let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
+        let grains = report["final_state"]["grains"].as_array().unwrap().len() as u64;
+        let flux_hash = first_sample(flux_id).await;
+        (id, hash, grains, flux_hash, tilt_id, widths_id)
     });
 
     let mut tab = Page::launch(&chrome);

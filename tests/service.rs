@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{scratch, Server, BIN};
+use common::{finished, get, scratch, wait_until, Server, BIN};
 
 fn worker(database: &str, extra: &[&str]) -> Child {
     Command::new(BIN)
@@ -27,32 +27,6 @@ fn signal(child: &Child, sig: i32) {
     unsafe {
         libc::kill(child.id() as i32, sig);
     }
-}
-
-async fn get(url: &str) -> Value {
-    reqwest::get(url).await.unwrap().json().await.unwrap()
-}
-
-async fn wait_until<F: Fn(&Value) -> bool>(
-    url: &str,
-    what: &str,
-    limit: Duration,
-    done: F,
-) -> Value {
-    let start = Instant::now();
-    loop {
-        let v = get(url).await;
-        if done(&v) {
-            return v;
-        }
-        assert!(start.elapsed() < limit, "timed out waiting for {what}: {v}");
-        tokio::time::sleep(Duration::from_millis(200)).await;
-    }
-}
-
-fn finished(sweep: &Value) -> bool {
-    let p = &sweep["progress"];
-    p["queued"] == 0 && p["running"] == 0
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

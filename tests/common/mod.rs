@@ -2,8 +2,10 @@
 //! `repose serve` on an ephemeral port.
 #![allow(dead_code)]
 
+use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_repose");
 
@@ -58,4 +60,60 @@ impl Drop for Server {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+pub async fn get(url: &str) -> Value {
+    reqwest::get(url).await.unwrap().json().await.unwrap()
+}
+
+pub async fn wait_until<F: Fn(&Value) -> bool>(
+    url: &str,
+    what: &str,
+    limit: Duration,
+    done: F,
+) -> Value {
+    let start = Instant::now();
+    loop {
+        let v = get(url).await;
+        if done(&v) {
+            return v;
+        }
+        assert!(start.elapsed() < limit, "timed out waiting for {what}: {v}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
+pub fn finished(sweep: &Value) -> bool {
+    let p = &sweep["progress"];
+    p["queued"] == 0 && p["running"] == 0
+}
+
+/// POSTs a JSON body and returns the JSON answer.
+pub async fn post(url: &str, body: &Value) -> Value {
+    reqwest::Client::new()
+        .post(url)
+        .json(body)
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap()
+}
+
+/// Queues a sweep on the server and waits until none of its jobs is left.
+pub async fn run_sweep(server: &Server, spec: &Value) -> String {
+    let created = post(&format!("{}/api/sweeps", server.url), spec).await;
+    let id = created["id"]
+        .as_str()
+        .unwrap_or_else(|| panic!("{created}"))
+        .to_string();
+    wait_until(
+        &format!("{}/api/sweeps/{id}", server.url),
+        "the sweep",
+        Duration::from_secs(180),
+        finished,
+    )
+    .await;
+    id
 }
