@@ -380,6 +380,12 @@ impl Store {
              VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21) \
              ON CONFLICT (sample_hash) DO NOTHING",
         ))
+        // Not a cached statement: through `sqlx::Any`, a NULL bound to a
+        // prepared PostgreSQL statement whose parameter was typed by an
+        // earlier non-NULL bind is rejected ("incorrect binary data format").
+        // Runs without an angle (failed outcomes) bind NULLs, so each insert
+        // is prepared with its own parameters.
+        .persistent(false)
         .bind(sample_hash)
         .bind(job_id)
         .bind(&report.engine)
