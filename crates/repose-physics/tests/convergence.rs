@@ -117,22 +117,23 @@ fn undamped_contact_converges_at_second_order_for_verlet_and_fifth_for_gear() {
 }
 
 #[test]
-fn damped_contact_keeps_verlet_second_order_and_gear_ahead() {
-    // Velocity-dependent forces: Verlet evaluates them at the predicted
-    // end-of-step velocity and stays second order. Gear-5's single corrector
-    // pass uses the predicted velocity too, which drops it to second order
-    // asymptotically, still far more accurate than Verlet at the same step.
+fn damped_contact_drops_both_schemes_to_lower_order_with_gear_far_ahead() {
+    // Velocity-dependent forces: Verlet evaluates the damping with the
+    // half-step velocity (the conventional choice), which makes it first
+    // order; Gear-5's single corrector pass evaluates it with the predicted
+    // velocity, which makes it second order asymptotically, still far more
+    // accurate than Verlet at the same step.
     let (ev, ov) = orders::<VelocityVerlet>(500.0, 100, 5);
     let (eg, og) = orders::<Gear5>(500.0, 100, 5);
     report("Verlet, γ_n = 500", &ev, &ov);
     report("Gear-5, γ_n = 500", &eg, &og);
     assert!(
-        ov.iter().all(|o| (1.8..2.3).contains(o)),
+        ov.iter().all(|o| (0.9..1.3).contains(o)),
         "Verlet orders {ov:?}"
     );
     assert!(og.iter().all(|o| *o > 1.8), "Gear-5 orders {og:?}");
     assert!(
-        eg.iter().zip(&ev).all(|(g, v)| *g < 0.1 * v),
+        eg.iter().zip(&ev).all(|(g, v)| *g < 0.02 * v),
         "Gear-5 {eg:?} against Verlet {ev:?}"
     );
 }
