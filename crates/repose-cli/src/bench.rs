@@ -44,15 +44,27 @@ pub struct BenchArgs {
 /// The physics options a scene can switch, each measured against the baseline.
 const OPTIONS: &[(&str, &[&str])] = &[
     ("baseline: Verlet, paper spring, floored F_n", &[]),
-    ("frictionless (μ = 0, γ_s = 0: no shear history)", &["contact.mu=0", "contact.gamma_s=0"]),
-    ("truncated shear spring", &["contact.shear_spring=\"truncated\""]),
-    ("raw normal force (no floor)", &["contact.normal_force=\"raw\""]),
+    (
+        "frictionless (μ = 0, γ_s = 0: no shear history)",
+        &["contact.mu=0", "contact.gamma_s=0"],
+    ),
+    (
+        "truncated shear spring",
+        &["contact.shear_spring=\"truncated\""],
+    ),
+    (
+        "raw normal force (no floor)",
+        &["contact.normal_force=\"raw\""],
+    ),
     ("Gear-5 integrator", &["numerics.integrator=\"gear5\""]),
 ];
 
 /// Particle-steps per second of each option, settled and flowing.
 fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    println!("{:<52} {:>12} {:>8} {:>12} {:>8}", "option (W = H = 4)", "settled M/s", "× base", "flow M/s", "× base");
+    println!(
+        "{:<52} {:>12} {:>8} {:>12} {:>8}",
+        "option (W = H = 4)", "settled M/s", "× base", "flow M/s", "× base"
+    );
     let mut base: Option<(f64, f64)> = None;
     for (label, overrides) in OPTIONS {
         let mut o = vec![
@@ -62,10 +74,14 @@ fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
             "numerics.integrator=\"verlet\"".to_string(),
         ];
         o.extend(overrides.iter().map(|s| s.to_string()));
-        let scene = Scene::from_toml("protocol = \"fill_release\"\nseed = 1", &o).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let scene = Scene::from_toml("protocol = \"fill_release\"\nseed = 1", &o)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
         let phases = throughput(&scene, scale(50_000), scale(20_000))?;
-        let (settled, flow) = (phases[0].particle_steps_per_second, phases[1].particle_steps_per_second);
+        let (settled, flow) = (
+            phases[0].particle_steps_per_second,
+            phases[1].particle_steps_per_second,
+        );
         let (bs, bf) = *base.get_or_insert((settled, flow));
         println!(
             "{label:<52} {:>12.2} {:>8.2} {:>12.2} {:>8.2}",
