@@ -23,6 +23,23 @@ fn worker(database: &str, extra: &[&str]) -> Child {
         .expect("repose worker starts")
 }
 
+/// Starts `count` worker processes that leave when the queue is empty,
+/// waits for all of them, and returns what each wrote to stderr.
+fn run_workers_until_idle(database: &str, count: usize) -> Vec<String> {
+    let workers: Vec<Child> = (0..count)
+        .map(|_| worker(database, &["--exit-when-idle"]))
+        .collect();
+    workers
+        .into_iter()
+        .map(|w| {
+            let out = w.wait_with_output().unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+            assert!(out.status.success(), "{stderr}");
+            stderr
+        })
+        .collect()
+}
+
 fn signal(child: &Child, sig: i32) {
     unsafe {
         libc::kill(child.id() as i32, sig);
@@ -210,17 +227,7 @@ async fn worker_processes_on_postgres_do_every_job_exactly_once() {
     let spec = cheap_sweep(60);
     let jobs = spec.expand().unwrap();
     let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
-    let workers: Vec<Child> = (0..4)
-        .map(|_| worker(&url, &["--exit-when-idle"]))
-        .collect();
-    for w in workers {
-        let out = w.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    run_workers_until_idle(&url, 4);
     assert_every_job_done_once(&store, &created.id, &jobs).await;
     // the work was shared
     let owners: i64 = sqlx::query_scalar("SELECT COUNT(DISTINCT job_id) FROM results")
@@ -238,13 +245,7 @@ async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
     let spec = cheap_sweep(120);
     let jobs = spec.expand().unwrap();
     let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
-    let workers: Vec<Child> = (0..4)
-        .map(|_| worker(&url, &["--exit-when-idle"]))
-        .collect();
-    for w in workers {
-        let out = w.wait_with_output().unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{stderr}");
+    for stderr in run_workers_until_idle(&url, 4) {
         assert!(!stderr.contains("locked"), "{stderr}");
     }
     assert_every_job_done_once(&store, &created.id, &jobs).await;

@@ -2,6 +2,9 @@
 //! collisions, energy conservation, friction on an incline, and the
 //! bookkeeping of the shear spring.
 
+mod common;
+
+use common::rk4_step;
 use repose_physics::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
 use repose_physics::dim::Vector;
 use repose_physics::engine::Simulation;
@@ -24,18 +27,7 @@ fn reference_restitution(k: f64, gamma: f64, m_eff: f64, v0: f64) -> f64 {
     let (mut d, mut dv) = (0.0f64, v0);
     let mut touched = false;
     for _ in 0..10_000_000 {
-        let k1 = (dv, accel(d, dv));
-        let k2 = (
-            dv + 0.5 * h * k1.1,
-            accel(d + 0.5 * h * k1.0, dv + 0.5 * h * k1.1),
-        );
-        let k3 = (
-            dv + 0.5 * h * k2.1,
-            accel(d + 0.5 * h * k2.0, dv + 0.5 * h * k2.1),
-        );
-        let k4 = (dv + h * k3.1, accel(d + h * k3.0, dv + h * k3.1));
-        d += h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
-        dv += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        (d, dv) = rk4_step(accel, d, dv, h);
         if d > 0.0 {
             touched = true;
         }

@@ -8,6 +8,9 @@
 //! on between two steps, a first-order error in the restitution; see
 //! `contact_physics.rs`.)
 
+mod common;
+
+use common::rk4_step;
 use repose_physics::contact::{Frictionless, HertzDamped, Pairwise};
 use repose_physics::dim::Vector;
 use repose_physics::engine::Simulation;
@@ -37,18 +40,7 @@ fn reference_height(y0: f64, gamma: f64) -> f64 {
     let h = DURATION / steps as f64;
     let (mut y, mut v) = (y0, 0.0);
     for _ in 0..steps {
-        let k1 = (v, accel(y, v));
-        let k2 = (
-            v + 0.5 * h * k1.1,
-            accel(y + 0.5 * h * k1.0, v + 0.5 * h * k1.1),
-        );
-        let k3 = (
-            v + 0.5 * h * k2.1,
-            accel(y + 0.5 * h * k2.0, v + 0.5 * h * k2.1),
-        );
-        let k4 = (v + h * k3.1, accel(y + h * k3.0, v + h * k3.1));
-        y += h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
-        v += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        (y, v) = rk4_step(accel, y, v, h);
     }
     y
 }
