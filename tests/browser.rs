@@ -390,4 +390,38 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "{msg}"
     );
     tab.screenshot("form-error.png");
+
+    // 7. Help shows the speed/accuracy report: its tables and both plots.
+    open(&mut tab, "/help");
+    wait_for(
+        &mut tab,
+        "the speed/accuracy report",
+        "document.querySelector('#speed-accuracy .doc table')",
+    );
+    assert!(count(&mut tab, "#speed-accuracy .doc table") >= 3);
+    assert_eq!(count(&mut tab, "#speed-accuracy .doc img"), 2);
+    let loaded = wait_for(
+        &mut tab,
+        "the plots to load",
+        "Array.from(document.querySelectorAll('#speed-accuracy img')).every(i => i.complete && i.naturalWidth > 0) || null",
+    );
+    assert_eq!(loaded, json!(true));
+    tab.screenshot("help.png");
+
+    // 8. The reproduction report, linked from Help, with every figure.
+    tab.evaluate("document.querySelector('a[href=\"#/doc/reproduction\"]').click()");
+    wait_for(
+        &mut tab,
+        "the reproduction report",
+        "document.querySelector('.doc h2') && document.querySelectorAll('.doc img').length >= 9 || null",
+    );
+    let title = tab.evaluate("document.querySelector('.doc h2').textContent");
+    assert!(title.as_str().unwrap().contains("Reproduction"), "{title}");
+    let loaded = wait_for(
+        &mut tab,
+        "the figures to load",
+        "Array.from(document.querySelectorAll('.doc img')).every(i => i.complete && i.naturalWidth > 0) || null",
+    );
+    assert_eq!(loaded, json!(true));
+    tab.screenshot("reproduction.png");
 }

@@ -436,17 +436,38 @@ async function sampleView(hash) {
 }
 
 // ---------------------------------------------------------------- help
-function helpView() {
-  setView(h("h1", {}, "Help"),
-    h("div", { class: "panel" },
-      h("p", {}, "repose runs parameter studies of the 2D granular piles of Lee & Herrmann (1993). A sweep varies scene values (axes) over a base scene, with several samples (seeds) per point; workers run the samples and this page shows their angles."),
-      h("ul", {},
-        h("li", {}, "θ_R: angle of repose after a box loses its side wall, by three slope methods (method 3 is the paper's headline)."),
-        h("li", {}, "θ_T: the tilt at which the released pile starts to move."),
-        h("li", {}, "Constant flux: grains added one at a time; the pile angle before each insertion traces the angle of marginal stability."),
-        h("li", {}, "Error bars show the sample standard deviation (the paper's error bar) or the standard error; points without a result (not settled, blown up) are counted apart.")),
-      h("p", {}, "Fidelity presets: quick (Verlet, coarser step), standard (Verlet), paper (Gear-5, the paper's integrator). The API is described at ",
-        h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), ".")));
+async function fetchDoc(name) {
+  const r = await fetch(`/docs/${name}.md`);
+  if (!r.ok) return null;
+  return window.markdown.render(await r.text(), "/docs/");
+}
+
+async function helpView() {
+  const intro = h("div", { class: "panel" },
+    h("p", {}, "repose runs parameter studies of the 2D granular piles of Lee & Herrmann (1993). A sweep varies scene values (axes) over a base scene, with several samples (seeds) per point; workers run the samples and this page shows their angles."),
+    h("ul", {},
+      h("li", {}, "θ_R: angle of repose after a box loses its side wall, by three slope methods (method 3 is the paper's headline)."),
+      h("li", {}, "θ_T: the tilt at which the released pile starts to move."),
+      h("li", {}, "Constant flux: grains added one at a time; the pile angle before each insertion traces the angle of marginal stability."),
+      h("li", {}, "Error bars show the sample standard deviation (the paper's error bar) or the standard error; points without a result (not settled, blown up) are counted apart.")),
+    h("p", {}, "Fidelity presets: quick (Verlet, coarser step, shorter equilibrium window), standard (Verlet at the default step), paper (Gear-5, the paper's integrator). What each costs and how far it moves the angles is measured below. The API is described at ",
+      h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), "."),
+    h("p", {}, "Reports: ",
+      h("a", { href: "#/doc/reproduction" }, "the reproduction of the paper's figures"), " · ",
+      h("a", { href: "#/doc/speed-vs-accuracy" }, "speed against accuracy"), "."));
+  setView(h("h1", {}, "Help"), intro, h("p", { class: "muted" }, "Loading the speed/accuracy report…"));
+  const doc = await fetchDoc("speed-vs-accuracy");
+  setView(h("h1", {}, "Help"), intro,
+    h("section", { class: "panel", id: "speed-accuracy" }, doc || h("p", { class: "muted" }, "The speed/accuracy report is not available.")));
+}
+
+async function docView(name) {
+  const doc = await fetchDoc(name);
+  if (!doc) {
+    setView(h("h1", {}, "Not found"), h("p", {}, `There is no report named ${name}. `, h("a", { href: "#/help" }, "Help")));
+    return;
+  }
+  setView(h("section", { class: "panel" }, doc));
 }
 
 // ---------------------------------------------------------------- routing
@@ -456,7 +477,8 @@ async function route() {
   try {
     if (!parts.length) await sweepsView();
     else if (parts[0] === "new") newView();
-    else if (parts[0] === "help") helpView();
+    else if (parts[0] === "help") await helpView();
+    else if (parts[0] === "doc" && parts[1]) await docView(parts[1]);
     else if (parts[0] === "sweep" && parts[2] === "figure") await figureView(parts[1], parts[3]);
     else if (parts[0] === "sweep") await sweepView(parts[1]);
     else if (parts[0] === "sample") await sampleView(parts[1]);

@@ -27,6 +27,7 @@ use repose_store::spec::SweepSpec;
 use repose_store::{figure, Store, FIGURES, METRICS};
 use serde::Deserialize;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 
 /// Attempts a job gets before it is marked failed.
 pub const MAX_ATTEMPTS: i64 = 3;
@@ -34,13 +35,23 @@ pub const MAX_ATTEMPTS: i64 = 3;
 #[derive(Clone)]
 pub struct AppState {
     pub store: Store,
+    /// Where to read reports from first (see [`doc_file`]).
+    pub docs: Option<PathBuf>,
 }
 
-/// The router of the whole service.
+/// The router of the whole service, serving the reports compiled into it.
 pub fn app(store: Store) -> Router {
+    app_with_docs(store, None)
+}
+
+/// The router, reading reports from `docs` when that folder holds a newer
+/// copy (`repose serve` passes the working directory's `docs/`, which
+/// `repose tradeoff` and `repose reproduce` regenerate).
+pub fn app_with_docs(store: Store, docs: Option<PathBuf>) -> Router {
     Router::new()
         .route("/", get(index))
         .route("/static/{file}", get(static_file))
+        .route("/docs/{file}", get(doc_file))
         .route("/api/health", get(health))
         .route("/api/openapi.json", get(openapi))
         .route("/api/sweeps", get(list_sweeps).post(create_sweep))
@@ -53,7 +64,7 @@ pub fn app(store: Store) -> Router {
         .route("/api/samples/{hash}", get(sample_report))
         .route("/api/figures", get(list_figures))
         .fallback(not_found)
-        .with_state(AppState { store })
+        .with_state(AppState { store, docs })
 }
 
 /// An error answer: status, message and the fields at fault.
@@ -134,7 +145,83 @@ const WEB: &[(&str, &str, &str)] = &[
         "text/css; charset=utf-8",
         include_str!("../../../web/style.css"),
     ),
+    (
+        "markdown.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../../web/markdown.js"),
+    ),
 ];
+
+/// Lists report files of `docs/` as (name, contents).
+macro_rules! docs {
+    ($($name:literal),* $(,)?) => {
+        &[$(($name, include_str!(concat!("../../../docs/", $name)))),*]
+    };
+}
+
+/// The generated reports, as committed in `docs/`.
+const DOCS: &[(&str, &str)] = docs![
+    "speed-vs-accuracy.md",
+    "speed-vs-accuracy-repose.svg",
+    "speed-vs-accuracy-tilt.svg",
+    "speed-vs-accuracy.csv",
+    "reproduction.md",
+    "reproduction.json",
+    "reproduction-fig2a.svg",
+    "reproduction-fig2b.svg",
+    "reproduction-fig3.svg",
+    "reproduction-fig4.svg",
+    "reproduction-fig5.svg",
+    "reproduction-fig7a.svg",
+    "reproduction-fig7b.svg",
+    "reproduction-k_n.svg",
+    "reproduction-gamma_n.svg",
+    "reproduction-quick.md",
+    "reproduction-quick.json",
+    "reproduction-quick-fig2a.svg",
+    "reproduction-quick-fig2b.svg",
+    "reproduction-quick-fig3.svg",
+    "reproduction-quick-fig4.svg",
+    "reproduction-quick-fig5.svg",
+    "reproduction-quick-fig7a.svg",
+    "reproduction-quick-fig7b.svg",
+    "reproduction-quick-k_n.svg",
+    "reproduction-quick-gamma_n.svg",
+];
+
+fn content_type(file: &str) -> &'static str {
+    match file.rsplit('.').next() {
+        Some("md") => "text/markdown; charset=utf-8",
+        Some("svg") => "image/svg+xml",
+        Some("csv") => "text/csv; charset=utf-8",
+        Some("json") => "application/json",
+        _ => "application/octet-stream",
+    }
+}
+
+/// A report file: from the docs folder given to the server if it has the
+/// file, else the copy compiled in. Only the known report names are served,
+/// so no path outside the folder can be reached.
+async fn doc_file(State(s): State<AppState>, Path(file): Path<String>) -> Response {
+    let Some((_, embedded)) = DOCS.iter().find(|(name, _)| *name == file) else {
+        return ApiError::new(StatusCode::NOT_FOUND, format!("no report file `{file}`"))
+            .into_response();
+    };
+    let body = match &s.docs {
+        Some(dir) => tokio::fs::read_to_string(dir.join(&file))
+            .await
+            .unwrap_or_else(|_| embedded.to_string()),
+        None => embedded.to_string(),
+    };
+    (
+        [
+            (header::CONTENT_TYPE, content_type(&file)),
+            (header::CACHE_CONTROL, "no-cache"),
+        ],
+        body,
+    )
+        .into_response()
+}
 
 async fn index() -> Html<&'static str> {
     Html(include_str!("../../../web/index.html"))

@@ -92,7 +92,11 @@ pub fn document() -> Value {
                 "responses": { "200": ok("figures", json!({ "type": "object" })) } } },
             "/api/samples/{hash}": { "get": { "summary": "The full run report of one sample (final state, energy trace, scene)",
                 "parameters": [{ "name": "hash", "in": "path", "required": true, "schema": { "type": "string" } }],
-                "responses": with_errors(json!({ "200": ok("run report", json!({ "type": "object" })) })) } }
+                "responses": with_errors(json!({ "200": ok("run report", json!({ "type": "object" })) })) } },
+            "/docs/{file}": { "get": { "summary": "A generated report file (reproduction.md, speed-vs-accuracy.md and their SVG, CSV and JSON files)",
+                "parameters": [{ "name": "file", "in": "path", "required": true, "schema": { "type": "string" } }],
+                "responses": { "200": { "description": "the file (Markdown, SVG, CSV or JSON)" },
+                               "404": { "$ref": "#/components/responses/Error" } } } }
         },
         "components": {
             "responses": {
@@ -123,7 +127,11 @@ pub fn document() -> Value {
                     "progress": { "type": "object", "properties": {
                         "queued": { "type": "integer" }, "running": { "type": "integer" }, "done": { "type": "integer" },
                         "failed": { "type": "integer" }, "cancelled": { "type": "integer" } } },
-                    "eta_seconds": { "type": ["number", "null"] } } },
+                    "eta_seconds": { "type": ["number", "null"] },
+                    "cost": { "type": "object", "description": "what the finished samples took", "properties": {
+                        "samples": { "type": "integer" },
+                        "wall_time": { "type": "number", "description": "sum of the samples' run times, s (one core each)" },
+                        "particle_steps": { "type": "integer", "description": "sum of grains × steps" } } } } },
                 "Aggregate": aggregate,
                 "Point": { "type": "object", "properties": {
                     "point": { "type": "object" }, "samples": { "type": "integer" },

@@ -163,3 +163,60 @@ async fn health_and_the_openapi_document_are_served() {
         assert!(doc["paths"][path].is_object(), "{path}");
     }
 }
+
+#[tokio::test]
+async fn reports_are_served_by_name_and_nothing_else_is() {
+    let s = store().await;
+    let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(text.starts_with("# Speed against accuracy"), "{text}");
+    let (status, _, text) = call(&s, "GET", "/docs/reproduction-fig3.svg", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(text.starts_with("<svg"));
+    for bad in [
+        "/docs/model.md",
+        "/docs/..%2FCargo.toml",
+        "/docs/nothing.svg",
+    ] {
+        let (status, json, text) = call(&s, "GET", bad, None).await;
+        assert_eq!(status, StatusCode::NOT_FOUND, "{bad}: {text}");
+        assert!(json["error"].is_string(), "{bad}: {text}");
+    }
+}
+
+#[tokio::test]
+async fn a_sweep_reports_what_its_samples_cost() {
+    let s = store().await;
+    let spec = json!({"protocol": "fill_release", "base": {"box": {"width": 1.0, "height": 1.0}}, "samples": 2, "fidelity": "quick"});
+    let (status, created, text) = call(&s, "POST", "/api/sweeps", Some(&spec.to_string())).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    let id = created["id"].as_str().unwrap();
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(sweep["cost"]["samples"], 0);
+    // Run both jobs the way a worker does.
+    let mut steps = 0i64;
+    while let Some(job) = s
+        .claim("test", std::time::Duration::from_secs(60))
+        .await
+        .unwrap()
+    {
+        let scene = repose_physics::Scene::from_toml(&job.scene, &[]).unwrap();
+        let report = repose_physics::run(&scene, &mut repose_physics::Quiet).unwrap();
+        steps += report.particle_steps as i64;
+        assert!(s
+            .complete(&job.job_id, "test", &job.sample_hash, &report)
+            .await
+            .unwrap());
+    }
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(sweep["cost"]["samples"], 2);
+    assert_eq!(sweep["cost"]["particle_steps"].as_i64().unwrap(), steps);
+    assert!(sweep["cost"]["wall_time"].as_f64().unwrap() > 0.0);
+    // The resolved scene of each job names the sweep's preset.
+    let (_, samples, _) = call(&s, "GET", &format!("/api/sweeps/{id}/samples"), None).await;
+    let hash = samples["samples"][0]["sample_hash"].as_str().unwrap();
+    let (_, report, _) = call(&s, "GET", &format!("/api/samples/{hash}"), None).await;
+    assert_eq!(report["scene"]["preset"], "quick");
+    assert_eq!(report["options"]["preset"], "quick");
+    assert_eq!(report["scene"]["numerics"]["dt_factor"], 0.05);
+}

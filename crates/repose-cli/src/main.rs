@@ -12,8 +12,11 @@
 
 mod bench;
 mod bench_service;
+mod chart;
 mod output;
+mod reproduce;
 mod service;
+mod tradeoff;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -43,6 +46,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Measure the service: queue overhead, query latency, worker speed-up.
     BenchService(bench_service::BenchServiceArgs),
+    /// Measure what each fidelity preset and knob costs and how far it moves θ_R and θ_T.
+    Tradeoff(tradeoff::TradeoffArgs),
+    /// Queue every sweep behind the paper's figures through the service and write a report.
+    Reproduce(reproduce::ReproduceArgs),
     /// Run the API and embedded workers (SQLite file by default).
     Serve(service::ServeArgs),
     /// Run headless workers against a shared database (cluster nodes).
@@ -62,6 +69,10 @@ struct RunArgs {
     /// Override a scene value, e.g. --set contact.mu=0.3 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Fidelity preset (quick, standard, paper): fills the numerical
+    /// settings the scene does not set; same as --set preset=NAME.
+    #[arg(long, value_name = "NAME")]
+    preset: Option<repose_physics::Preset>,
     /// Print one JSON document instead of the summary.
     #[arg(long)]
     json: bool,
@@ -88,6 +99,8 @@ fn main() -> ExitCode {
         Command::Run(args) => run(args),
         Command::Bench(args) => bench::run(args),
         Command::BenchService(args) => bench_service::run_bench(args),
+        Command::Tradeoff(args) => tradeoff::run(args),
+        Command::Reproduce(args) => reproduce::run(args),
         Command::Serve(args) => service::serve(args),
         Command::Worker(args) => service::worker(args),
         Command::Submit(args) => service::submit(args),
@@ -147,7 +160,11 @@ impl Observer for Bar {
 fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     let text = std::fs::read_to_string(&args.scene)
         .with_context(|| format!("cannot read scene file {}", args.scene.display()))?;
-    let scene = match Scene::from_toml(&text, &args.set) {
+    let mut overrides = args.set.clone();
+    if let Some(p) = args.preset {
+        overrides.insert(0, format!("preset={p}"));
+    }
+    let scene = match Scene::from_toml(&text, &overrides) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: invalid scene {}", args.scene.display());
@@ -256,8 +273,11 @@ fn summary(r: &RunReport) -> String {
     );
     let _ = writeln!(
         s,
-        "options       integrator {}, normal force {}, shear spring {}",
-        r.options.integrator, r.options.normal_force, r.options.shear_spring
+        "options       preset {}, integrator {}, normal force {}, shear spring {}",
+        r.options.preset.as_deref().unwrap_or("none"),
+        r.options.integrator,
+        r.options.normal_force,
+        r.options.shear_spring
     );
     s
 }

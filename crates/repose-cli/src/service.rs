@@ -26,6 +26,10 @@ pub struct ServeArgs {
     /// Embedded workers (default: one per core; 0 for an API-only server).
     #[arg(long)]
     workers: Option<usize>,
+    /// Folder of generated reports to serve at /docs/ (falls back to the
+    /// copies compiled into the binary).
+    #[arg(long, default_value = "docs")]
+    docs: PathBuf,
     #[command(flatten)]
     lease: LeaseArgs,
 }
@@ -54,6 +58,15 @@ pub struct LeaseArgs {
     /// Heartbeat period in seconds.
     #[arg(long, default_value_t = 10.0)]
     heartbeat: f64,
+}
+
+impl Default for LeaseArgs {
+    fn default() -> Self {
+        LeaseArgs {
+            lease: 60.0,
+            heartbeat: 10.0,
+        }
+    }
 }
 
 impl LeaseArgs {
@@ -102,13 +115,13 @@ pub struct ExportArgs {
     server: String,
 }
 
-fn runtime() -> anyhow::Result<tokio::runtime::Runtime> {
+pub(crate) fn runtime() -> anyhow::Result<tokio::runtime::Runtime> {
     Ok(tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?)
 }
 
-fn init_logging() {
+pub(crate) fn init_logging() {
     let filter = tracing_subscriber::EnvFilter::try_from_env("REPOSE_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
     let _ = tracing_subscriber::fmt()
@@ -124,7 +137,7 @@ fn owner_prefix() -> String {
     format!("{host}-{}", std::process::id())
 }
 
-fn spawn_workers(
+pub(crate) fn spawn_workers(
     store: &Store,
     count: usize,
     lease: &LeaseArgs,
@@ -167,7 +180,8 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             args.database
         );
         let mut stop = shutdown.clone();
-        axum::serve(listener, repose_api::app(store))
+        let docs = args.docs.is_dir().then(|| args.docs.clone());
+        axum::serve(listener, repose_api::app_with_docs(store, docs))
             .with_graceful_shutdown(async move {
                 while !*stop.borrow() {
                     if stop.changed().await.is_err() {
@@ -232,7 +246,25 @@ fn read_spec(path: &PathBuf) -> anyhow::Result<Value> {
     }
 }
 
-async fn get_json(client: &reqwest::Client, url: &str) -> anyhow::Result<Value> {
+/// Posts a sweep spec; returns the answer's status and JSON body.
+pub(crate) async fn post_sweep(
+    client: &reqwest::Client,
+    server: &str,
+    spec: &Value,
+) -> anyhow::Result<(reqwest::StatusCode, Value)> {
+    let resp = client
+        .post(format!("{server}/api/sweeps"))
+        .json(spec)
+        .send()
+        .await
+        .with_context(|| {
+            format!("cannot reach the server at {server} (is `repose serve` running?)")
+        })?;
+    let status = resp.status();
+    Ok((status, resp.json().await.unwrap_or(Value::Null)))
+}
+
+pub(crate) async fn get_json(client: &reqwest::Client, url: &str) -> anyhow::Result<Value> {
     let resp = client
         .get(url)
         .send()
@@ -255,16 +287,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
         let client = reqwest::Client::new();
-        let resp = client
-            .post(format!("{server}/api/sweeps"))
-            .json(&spec)
-            .send()
-            .await
-            .with_context(|| {
-                format!("cannot reach the server at {server} (is `repose serve` running?)")
-            })?;
-        let status = resp.status();
-        let body: Value = resp.json().await.unwrap_or(Value::Null);
+        let (status, body) = post_sweep(&client, &server, &spec).await?;
         if !status.is_success() {
             eprintln!("error: the server refused the sweep ({})", status.as_u16());
             for e in body["errors"].as_array().into_iter().flatten() {

@@ -124,19 +124,34 @@ fn bad_input_names_the_field_and_exits_non_zero() {
 
 #[test]
 fn a_run_that_fails_says_why_and_exits_with_one() {
-    // A time step twenty times the contact time: the grains fly through each other.
+    // A forced step twice the contact time is refused before anything runs.
     let out = repose(&[
         "run",
         "examples/collision.toml",
         "--set",
         "numerics.dt=2e-3",
+    ]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("numerics.dt") && stderr.contains("stability limit"),
+        "{stderr}"
+    );
+
+    // Just inside the limit the step is accepted, but half a contact time
+    // per step is far too coarse: the energy guard fails the run.
+    let out = repose(&[
+        "run",
+        "examples/collision.toml",
+        "--set",
+        "numerics.dt=5e-4",
         "--set",
         "duration=0.05",
     ]);
     let stdout = text(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
     assert!(
-        stdout.contains("failed") && stdout.contains("reason"),
+        stdout.contains("failed") && stdout.contains("energy blow-up"),
         "{stdout}"
     );
 }

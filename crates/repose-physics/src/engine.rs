@@ -40,6 +40,8 @@ pub enum Blowup {
     },
     #[error("grain {id} passed through wall {wall} at t = {time:.6} s")]
     ThroughWall { id: u32, wall: usize, time: f64 },
+    #[error("energy blow-up at t = {time:.6} s: kinetic energy {kinetic:.3e} erg exceeds the {limit:.3e} erg that gravity and the initial state can supply (the time step is too coarse for these contacts)")]
+    Energy { kinetic: f64, limit: f64, time: f64 },
 }
 
 /// Safety limits checked every step.
@@ -49,6 +51,10 @@ pub struct Guards {
     pub max_overlap: f64,
     /// Largest distance a grain may travel in one step, as a fraction of its radius.
     pub max_step_travel: f64,
+    /// Energy budget: the kinetic energy may not exceed
+    /// `energy_per_mass · Σm + energy_offset` (see [`Simulation::set_energy_budget`]).
+    pub energy_per_mass: f64,
+    pub energy_offset: f64,
 }
 
 impl Default for Guards {
@@ -56,6 +62,8 @@ impl Default for Guards {
         Guards {
             max_overlap: 0.5,
             max_step_travel: 0.5,
+            energy_per_mass: f64::INFINITY,
+            energy_offset: 0.0,
         }
     }
 }
@@ -403,10 +411,17 @@ where
     /// zero of height at the origin.
     pub fn total_energy(&self) -> f64 {
         let p = &self.particles;
-        let mut e = p.kinetic_energy();
+        let mut e = p.kinetic_energy() + self.elastic_energy();
         for i in 0..p.len() {
             e -= p.mass[i] * self.gravity.dot(&p.pos[i]);
         }
+        e
+    }
+
+    /// Energy stored in the contact springs (normal and shear), erg.
+    pub fn elastic_energy(&self) -> f64 {
+        let p = &self.particles;
+        let mut e = 0.0;
         for (k, [i, j]) in self.neighbors.pairs.iter().enumerate() {
             let (i, j) = (*i as usize, *j as usize);
             let overlap = p.radius[i] + p.radius[j] - (p.pos[i] - p.pos[j]).norm();
@@ -427,6 +442,35 @@ where
             }
         }
         e
+    }
+
+    /// Arms the energy guard. A grain that moves within a region of size
+    /// `extent` under gravity can gain at most `|g|·extent` per unit mass, and
+    /// the stored kinetic and elastic energy can only be released once; a
+    /// kinetic energy above twice that budget can only come from the
+    /// integrator itself, so [`Simulation::check_energy`] fails the run.
+    pub fn set_energy_budget(&mut self, extent: f64) {
+        self.rebuild_lists();
+        let stored = self.particles.kinetic_energy() + self.elastic_energy();
+        self.guards.energy_per_mass = 2.0 * self.gravity.norm() * extent;
+        self.guards.energy_offset = 2.0 * stored;
+    }
+
+    /// Fails with [`Blowup::Energy`] when the kinetic energy exceeds the budget.
+    pub fn check_energy(&self) -> Result<(), Blowup> {
+        let p = &self.particles;
+        let kinetic = p.kinetic_energy();
+        let mass: f64 = p.mass.iter().sum();
+        let limit = self.guards.energy_per_mass * mass + self.guards.energy_offset;
+        // A budget of zero (no gravity, nothing moving) still allows rounding.
+        if kinetic > limit * (1.0 + 1e-9) + f64::MIN_POSITIVE || kinetic.is_nan() {
+            return Err(Blowup::Energy {
+                kinetic,
+                limit,
+                time: self.time,
+            });
+        }
+        Ok(())
     }
 
     /// Normal force of every touching pair, for drawing force chains:

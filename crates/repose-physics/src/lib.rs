@@ -34,6 +34,7 @@ pub mod integrate;
 pub mod measure;
 pub mod neighbors;
 pub mod particles;
+pub mod preset;
 pub mod protocol;
 pub mod report;
 pub mod scene;
@@ -41,6 +42,7 @@ pub mod setup;
 pub mod theory;
 pub mod walls;
 
+pub use preset::Preset;
 pub use protocol::{run, Observer, Progress, Quiet};
 pub use report::{Outcome, RunReport, ENGINE};
 pub use scene::{Protocol, Scene, SceneError};

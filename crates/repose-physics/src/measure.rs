@@ -56,6 +56,30 @@ impl Surface {
         }
     }
 
+    /// Whether this surface is a pile whose slope is an angle of repose:
+    /// at least three columns hold grains, and the fitted surface falls
+    /// towards the open side, or is level to within a grain.
+    pub fn check(&self, angles: &SlopeAngles) -> Result<(), String> {
+        let occupied = self.h.iter().filter(|h| **h > 0.0).count();
+        if occupied < 3 {
+            return Err(format!(
+                "only {occupied} of {} columns hold grains after the release: too few to measure a slope",
+                self.h.len()
+            ));
+        }
+        // A level surface is rough by about a grain: a rise smaller than one
+        // column width across the box is noise around zero.
+        let span = self.x[self.x.len() - 1] - self.x[0];
+        let tolerance = (self.cell_width / span).atan().to_degrees();
+        if angles.cumulative_fit < -tolerance {
+            return Err(format!(
+                "the surface rises towards the open side ({:.2}° by method 3): the fill stood without avalanching, so its slope is not an angle of repose",
+                angles.cumulative_fit
+            ));
+        }
+        Ok(())
+    }
+
     /// The three slope estimates of section 3.
     pub fn slope_angles(&self) -> SlopeAngles {
         let n = self.h.len();

@@ -263,6 +263,27 @@ fn open_side(width: f64) -> Outlet<2> {
     }
 }
 
+/// The size of the region a scene's grains can move in, cm: the box (or
+/// the grains' starting spread) for the box protocols; for a free run also
+/// the distance the fastest grain can cover in the run's duration.
+fn reach<L: ContactLaw<2>, I: Integrator<2>>(sim: &Simulation<2, L, I>, scene: &Scene) -> f64 {
+    let p = &sim.particles;
+    let (mut lo, mut hi) = (
+        Vector::<2>::new(0.0, 0.0),
+        Vector::<2>::new(scene.container.width, scene.container.fill_height()),
+    );
+    for (x, r) in p.pos.iter().zip(&p.radius) {
+        lo = lo.inf(&x.add_scalar(-r));
+        hi = hi.sup(&x.add_scalar(*r));
+    }
+    let mut extent = (hi - lo).norm();
+    if scene.protocol == Protocol::FreeRun {
+        let t = scene.duration.unwrap_or(0.0);
+        extent += p.max_speed() * t + 0.5 * sim.gravity.norm() * t * t;
+    }
+    extent
+}
+
 /// Index of the right wall in the box protocols.
 const RIGHT_WALL: usize = 2;
 
@@ -295,6 +316,8 @@ impl<'a, L: ContactLaw<2>, I: Integrator<2>> Runner<'a, L, I> {
         observer: &'a mut dyn Observer,
     ) -> Self {
         let check_steps = ((scene.equilibrium.check_interval / sim.dt).round() as u64).max(1);
+        let mut sim = sim;
+        sim.set_energy_budget(reach(&sim, scene));
         Runner {
             sim,
             scene,
@@ -313,6 +336,7 @@ impl<'a, L: ContactLaw<2>, I: Integrator<2>> Runner<'a, L, I> {
 
 impl<L: ContactLaw<2>, I: Integrator<2>> Runner<'_, L, I> {
     fn sample(&mut self, phase: Phase) -> Result<TracePoint, Stop> {
+        self.sim.check_energy()?;
         let p = &self.sim.particles;
         let n = p.len().max(1) as f64;
         let point = TracePoint {
@@ -614,25 +638,30 @@ impl EngineJob for ProtocolRun<'_> {
                 Ok(()) => {
                     let s = r.surface();
                     let angles = s.slope_angles();
-                    repose = Some(angles);
-                    surface = Some(s);
-                    report_theory.tilting = theory::tilting_angle(mu, angles.cumulative_fit);
-                    if scene.protocol == Protocol::Tilt {
-                        match r.tilt() {
-                            Ok(t) => {
-                                tilt = Some(t);
-                                Outcome::Completed
-                            }
-                            Err((_, Stop::TimedOut)) => Outcome::NoOnset {
-                                reason: format!(
-                                    "the pile did not move before the tilt reached {}°",
-                                    scene.tilt.max_angle
-                                ),
-                            },
-                            Err((phase, stop)) => outcome_of(phase, stop, scene),
-                        }
+                    if let Err(reason) = s.check(&angles) {
+                        surface = Some(s);
+                        Outcome::Unmeasurable { reason }
                     } else {
-                        Outcome::Completed
+                        repose = Some(angles);
+                        surface = Some(s);
+                        report_theory.tilting = theory::tilting_angle(mu, angles.cumulative_fit);
+                        if scene.protocol == Protocol::Tilt {
+                            match r.tilt() {
+                                Ok(t) => {
+                                    tilt = Some(t);
+                                    Outcome::Completed
+                                }
+                                Err((_, Stop::TimedOut)) => Outcome::NoOnset {
+                                    reason: format!(
+                                        "the pile did not move before the tilt reached {}°",
+                                        scene.tilt.max_angle
+                                    ),
+                                },
+                                Err((phase, stop)) => outcome_of(phase, stop, scene),
+                            }
+                        } else {
+                            Outcome::Completed
+                        }
                     }
                 }
             },
@@ -718,6 +747,7 @@ impl EngineJob for ProtocolRun<'_> {
             particle_steps: sim.counters.particle_steps,
             particle_steps_per_second: sim.counters.particle_steps as f64 / wall_time.max(1e-12),
             options: Options {
+                preset: scene.preset.map(|p| p.name().to_string()),
                 integrator: scene.numerics.integrator.name().to_string(),
                 normal_force: format!("{:?}", scene.contact.normal_force).to_lowercase(),
                 shear_spring: format!("{:?}", scene.contact.shear_spring).to_lowercase(),

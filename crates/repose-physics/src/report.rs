@@ -35,6 +35,12 @@ pub enum Outcome {
     Cancelled {
         phase: String,
     },
+    /// The run ended cleanly but what it left is not a pile whose slope is
+    /// an angle of repose (too few grains left, or a surface rising towards
+    /// the open side); no angle is reported.
+    Unmeasurable {
+        reason: String,
+    },
 }
 
 impl Outcome {
@@ -49,6 +55,7 @@ impl Outcome {
             Outcome::NoOnset { .. } => "no_onset",
             Outcome::Failed { .. } => "failed",
             Outcome::Cancelled { .. } => "cancelled",
+            Outcome::Unmeasurable { .. } => "unmeasurable",
         }
     }
 
@@ -58,7 +65,7 @@ impl Outcome {
             Outcome::NotSettled { phase, reason } | Outcome::Failed { phase, reason } => {
                 Some(format!("{phase}: {reason}"))
             }
-            Outcome::NoOnset { reason } => Some(reason.clone()),
+            Outcome::NoOnset { reason } | Outcome::Unmeasurable { reason } => Some(reason.clone()),
             Outcome::Cancelled { phase } => Some(format!("cancelled during {phase}")),
         }
     }
@@ -162,6 +169,9 @@ impl Phase {
 /// level of a report so no reader has to dig them out of the scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Options {
+    /// The fidelity preset the scene named, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
     pub integrator: String,
     pub normal_force: String,
     pub shear_spring: String,

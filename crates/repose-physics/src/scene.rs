@@ -14,6 +14,7 @@
 use crate::contact::{NormalForce, ShearSpringMode};
 use crate::integrate::Scheme;
 use crate::particles::Grain;
+use crate::preset::Preset;
 use crate::walls::Wall;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -56,6 +57,10 @@ pub enum RngKind {
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     pub protocol: Protocol,
+    /// Named fidelity preset; it fills the numerical settings the scene
+    /// leaves unset (see [`crate::preset`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<Preset>,
     /// Seed of the random generator (placement and radii).
     #[serde(default)]
     pub seed: u64,
@@ -432,6 +437,12 @@ const MAX_PACKING: f64 = 0.9;
 /// Hard ceiling on grains per sample, to refuse absurd requests early.
 pub const MAX_GRAINS: usize = 1_000_000;
 
+/// The largest time step accepted, as a fraction of the contact time. At
+/// half a contact time no integrator resolves a collision; steps between
+/// this and a few hundredths still run, and the engine's guards fail them
+/// if they go unstable (which they do for falling grains above ~t_c/10).
+pub const MAX_DT_FACTOR: f64 = 0.5;
+
 impl Scene {
     /// Parses a TOML document — or a JSON one (text starting with `{`, as
     /// results store their scenes) — applies `key=value` overrides (dotted
@@ -449,14 +460,24 @@ impl Scene {
         for o in overrides {
             apply_override(&mut doc, o)?;
         }
-        let scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(doc))
-            .map_err(|e| path_error(e.path().to_string(), e.inner().to_string()))?;
-        scene.validate()?;
-        Ok(scene)
+        let json = serde_json::to_value(&doc)
+            .map_err(|e| SceneError::single("(document)", e.to_string()))?;
+        Scene::from_json(json)
     }
 
-    /// Reads the same structure from JSON and validates it.
-    pub fn from_json(value: serde_json::Value) -> Result<Scene, SceneError> {
+    /// Reads the same structure from JSON, fills in the named preset's
+    /// settings and validates.
+    pub fn from_json(mut value: serde_json::Value) -> Result<Scene, SceneError> {
+        if let Some(doc) = value.as_object_mut() {
+            if let Some(name) = doc.get("preset").filter(|v| !v.is_null()) {
+                let preset: Preset = name
+                    .as_str()
+                    .ok_or_else(|| "a preset is named by a string".to_string())
+                    .and_then(str::parse)
+                    .map_err(|m| SceneError::single("preset", m))?;
+                preset.fill(doc);
+            }
+        }
         let scene: Scene = serde_path_to_error::deserialize(value)
             .map_err(|e| path_error(e.path().to_string(), e.inner().to_string()))?;
         scene.validate()?;
@@ -611,11 +632,12 @@ impl Scene {
 
         let n = &self.numerics;
         c.positive("numerics.dt_factor", n.dt_factor);
-        if n.dt_factor.is_finite() && n.dt_factor > 1.0 {
+        if n.dt_factor.is_finite() && n.dt_factor > MAX_DT_FACTOR {
             c.fail(
                 "numerics.dt_factor",
                 format!(
-                    "must be at most 1 (a time step longer than a contact), got {}",
+                    "{} is above the stability limit of {MAX_DT_FACTOR}: a step must be \
+                     well under the contact time (0.02 by default)",
                     n.dt_factor
                 ),
             );
@@ -722,6 +744,21 @@ impl Scene {
                 "numerics.dt",
                 "the derived time step is not a positive finite number",
             );
+        }
+        if let (true, Some(dt)) = (c.0.is_empty(), n.dt) {
+            let t_c = self.contact_time();
+            if dt > MAX_DT_FACTOR * t_c {
+                c.fail(
+                    "numerics.dt",
+                    format!(
+                        "{dt:.3e} s is above the stability limit: the stiffest contact lasts \
+                         t_c = {t_c:.3e} s at the reference speed, so a step may be at most \
+                         {:.3e} s (t_c/50 = {:.3e} s by default)",
+                        MAX_DT_FACTOR * t_c,
+                        t_c / 50.0
+                    ),
+                );
+            }
         }
 
         if c.0.is_empty() {

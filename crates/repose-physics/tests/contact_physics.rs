@@ -94,17 +94,26 @@ fn head_on_collision_restitution_matches_the_contact_equation() {
     let m_eff = 0.5 * sphere_mass(1.0, a);
     let mut worst = [0.0f64; 2];
     let mut failures = Vec::new();
-    for &(k_n, gamma_n) in &[
-        (1e5, 100.0),
-        (1e6, 500.0),
-        (1e6, 50.0),
-        (1e8, 500.0),
-        (1e4, 500.0),
+    let all: &[f64] = &[1.0, 10.0, 100.0];
+    // The softest grains at 100 cm/s would overlap by more than a radius,
+    // which the overlap guard refuses (see tests/extremes.rs).
+    let slow: &[f64] = &[1.0, 10.0];
+    // The damping error grows as γ_n·dt, and soft contacts last long: at
+    // k_n = 10³ the step is set to t_c/200 to keep it under 0.5 %.
+    for &(k_n, gamma_n, speeds, dt_factor) in &[
+        (1e5, 100.0, all, DT_FACTOR),
+        (1e6, 500.0, all, DT_FACTOR),
+        (1e6, 50.0, all, DT_FACTOR),
+        (1e8, 500.0, all, DT_FACTOR),
+        (1e4, 500.0, all, DT_FACTOR),
+        (1e3, 500.0, slow, DT_FACTOR / 2.0),
+        (1e10, 500.0, all, DT_FACTOR),
+        (1e10, 0.0, all, DT_FACTOR),
     ] {
-        for &v in &[1.0, 10.0, 100.0] {
+        for &v in speeds {
             let reference = reference_restitution(k_n, gamma_n, m_eff, v);
             for (k, integrator) in ["gear5", "verlet"].into_iter().enumerate() {
-                let e = scene_restitution(integrator, DT_FACTOR, k_n, gamma_n, v);
+                let e = scene_restitution(integrator, dt_factor, k_n, gamma_n, v);
                 let rel = (e - reference).abs() / reference;
                 worst[k] = worst[k].max(rel);
                 let line = format!(

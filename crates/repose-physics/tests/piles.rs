@@ -159,7 +159,7 @@ fn constant_flux_builds_a_pile_up_to_a_steady_angle() {
 fn failures_end_with_an_outcome_that_says_why() {
     // A time step far above the contact time: the run blows up and says so.
     let r = run(
-        &scene("fill_release", &["numerics.dt=5e-4".into()]),
+        &scene("fill_release", &["numerics.dt=3e-4".into()]),
         &mut Quiet,
     )
     .unwrap();

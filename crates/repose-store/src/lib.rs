@@ -105,6 +105,15 @@ pub struct Created {
     pub reused: usize,
 }
 
+/// What a sweep's finished samples took: the sum of their run times (s,
+/// one core each) and of their particle-steps.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct Cost {
+    pub samples: i64,
+    pub wall_time: f64,
+    pub particle_steps: i64,
+}
+
 /// Job counts of a sweep by state.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct Progress {
@@ -376,8 +385,8 @@ impl Store {
         sqlx::query(&self.sql(
             "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, theta_r_endpoints, theta_r_line, theta_r, \
              theta_t, theta_ms_mean, theta_ms_sd, theta_ms_max, grains_initial, grains_final, grains_lost, iterations, \
-             simulated_time, wall_time, report, created_at) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21) \
+             simulated_time, wall_time, report, created_at, particle_steps) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22) \
              ON CONFLICT (sample_hash) DO NOTHING",
         ))
         // Not a cached statement: through `sqlx::Any`, a NULL bound to a
@@ -407,6 +416,7 @@ impl Store {
         .bind(report.wall_time)
         .bind(serde_json::to_string(report)?)
         .bind(now)
+        .bind(i64::try_from(report.particle_steps).unwrap_or(i64::MAX))
         .execute(&mut *tx)
         .await?;
         tx.commit().await?;
@@ -564,6 +574,8 @@ pub struct Sample {
     pub iterations: i64,
     pub simulated_time: f64,
     pub wall_time: f64,
+    /// Grains × steps the run took.
+    pub particle_steps: i64,
     pub engine: String,
 }
 
@@ -582,6 +594,8 @@ pub struct SweepInfo {
     /// the mean wall time of this sweep's finished samples and the number of
     /// jobs running now (none while nothing runs or nothing has finished).
     pub eta_seconds: Option<f64>,
+    /// What its finished samples took.
+    pub cost: Cost,
 }
 
 fn parse_point(text: &str) -> Result<serde_json::Map<String, serde_json::Value>> {
@@ -634,13 +648,20 @@ impl Store {
             return Ok(None);
         };
         let progress = self.progress(id).await?;
-        let mean_wall: Option<f64> = sqlx::query_scalar(&self.sql(
-            "SELECT AVG(r.wall_time) FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+        let cost_row = sqlx::query(&self.sql(
+            "SELECT COUNT(*) AS n, SUM(r.wall_time) AS wall, CAST(SUM(r.particle_steps) AS BIGINT) AS steps \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
              WHERE j.sweep_id = $1 AND j.state = 'done'",
         ))
         .bind(id)
         .fetch_one(&self.pool)
         .await?;
+        let cost = Cost {
+            samples: cost_row.get("n"),
+            wall_time: cost_row.get::<Option<f64>, _>("wall").unwrap_or(0.0),
+            particle_steps: cost_row.get::<Option<i64>, _>("steps").unwrap_or(0),
+        };
+        let mean_wall = (cost.samples > 0).then(|| cost.wall_time / cost.samples as f64);
         let left = progress.queued + progress.running;
         let eta_seconds = match (mean_wall, progress.running) {
             (_, _) if left == 0 => Some(0.0),
@@ -657,6 +678,7 @@ impl Store {
             spec: serde_json::from_str(&row.get::<String, _>("spec"))?,
             progress,
             eta_seconds,
+            cost,
         }))
     }
 
@@ -665,7 +687,7 @@ impl Store {
         let rows = sqlx::query(&self.sql(
             "SELECT j.id AS job_id, j.sample_hash, j.point, j.sample, j.seed, r.outcome, r.reason, r.theta_r, r.theta_r_line, \
              r.theta_r_endpoints, r.theta_t, r.theta_ms_mean, r.theta_ms_sd, r.theta_ms_max, r.grains_initial, r.grains_final, \
-             r.grains_lost, r.iterations, r.simulated_time, r.wall_time, r.engine \
+             r.grains_lost, r.iterations, r.simulated_time, r.wall_time, r.particle_steps, r.engine \
              FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash WHERE j.sweep_id = $1 ORDER BY j.seq",
         ))
         .bind(sweep_id)
@@ -694,6 +716,7 @@ impl Store {
                     iterations: r.get("iterations"),
                     simulated_time: r.get("simulated_time"),
                     wall_time: r.get("wall_time"),
+                    particle_steps: r.get("particle_steps"),
                     engine: r.get("engine"),
                 })
             })

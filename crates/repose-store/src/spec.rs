@@ -7,6 +7,7 @@
 //! physics crate's own checks, so a sweep is refused exactly when one of
 //! its scenes would be.
 
+use repose_physics::preset::{set_path, Preset};
 use repose_physics::scene::{FieldError, Protocol, Scene, SceneError};
 use repose_physics::ENGINE;
 use serde::{Deserialize, Serialize};
@@ -17,34 +18,8 @@ use std::collections::BTreeMap;
 /// The largest number of jobs one sweep may expand into.
 pub const MAX_JOBS: usize = 100_000;
 
-/// Named speed/accuracy settings, applied to every scene of a sweep where
-/// the base scene does not set the value itself.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Fidelity {
-    /// Velocity Verlet, a coarser step and a shorter equilibrium window.
-    Quick,
-    /// Velocity Verlet at the default step.
-    #[default]
-    Standard,
-    /// The paper's Gear-5 integrator at the default step.
-    Paper,
-}
-
-impl Fidelity {
-    /// The scene values this preset sets, as dotted keys.
-    pub fn settings(self) -> Vec<(&'static str, Value)> {
-        match self {
-            Fidelity::Quick => vec![
-                ("numerics.integrator", Value::from("verlet")),
-                ("numerics.dt_factor", Value::from(0.03)),
-                ("equilibrium.hold", Value::from(0.05)),
-            ],
-            Fidelity::Standard => vec![("numerics.integrator", Value::from("verlet"))],
-            Fidelity::Paper => vec![("numerics.integrator", Value::from("gear5"))],
-        }
-    }
-}
+/// The fidelity preset of a sweep (the physics crate's [`Preset`]).
+pub type Fidelity = Preset;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -99,39 +74,6 @@ fn field_error(field: impl Into<String>, message: impl Into<String>) -> SceneErr
     }
 }
 
-/// Sets a dotted key in a JSON object, creating tables on the way.
-fn set_path(doc: &mut Map<String, Value>, key: &str, value: Value) -> Result<(), String> {
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err("empty segment in the key".into());
-    }
-    let mut table = doc;
-    for part in &parts[..parts.len() - 1] {
-        let entry = table
-            .entry(part.to_string())
-            .or_insert_with(|| Value::Object(Map::new()));
-        table = match entry {
-            Value::Object(t) => t,
-            _ => return Err(format!("`{part}` is not a table")),
-        };
-    }
-    table.insert(parts[parts.len() - 1].to_string(), value);
-    Ok(())
-}
-
-fn has_path(doc: &Map<String, Value>, key: &str) -> bool {
-    let mut table = doc;
-    let parts: Vec<&str> = key.split('.').collect();
-    for (k, part) in parts.iter().enumerate() {
-        match table.get(*part) {
-            None => return false,
-            Some(Value::Object(t)) if k + 1 < parts.len() => table = t,
-            Some(_) => return k + 1 == parts.len(),
-        }
-    }
-    false
-}
-
 impl SweepSpec {
     /// A display name: the given one, or the protocol and the swept keys.
     pub fn display_name(&self) -> String {
@@ -157,7 +99,7 @@ impl SweepSpec {
         if self.samples == 0 {
             return Err(field_error("samples", "must be at least 1"));
         }
-        for key in ["protocol", "seed"] {
+        for key in ["protocol", "seed", "preset"] {
             if self.base.contains_key(key) {
                 return Err(field_error(
                     format!("base.{key}"),
@@ -172,7 +114,7 @@ impl SweepSpec {
                     "an axis needs at least one value",
                 ));
             }
-            if key == "protocol" || key == "seed" {
+            if key == "protocol" || key == "seed" || key == "preset" {
                 return Err(field_error(format!("axes.{key}"), "cannot be swept"));
             }
         }
@@ -199,11 +141,7 @@ impl SweepSpec {
             "protocol".into(),
             serde_json::to_value(self.protocol).expect("protocol serialises"),
         );
-        for (key, value) in self.fidelity.settings() {
-            if !has_path(&base, key) && !self.axes.contains_key(key) {
-                set_path(&mut base, key, value).expect("preset keys are well formed");
-            }
-        }
+        base.insert("preset".into(), Value::from(self.fidelity.name()));
 
         let keys: Vec<&String> = self.axes.keys().collect();
         let mut jobs = Vec::with_capacity(total);

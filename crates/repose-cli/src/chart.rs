@@ -1,0 +1,376 @@
+//! Static SVG charts for the generated reports: points with error bars,
+//! curves, optional labels and a log-scaled x axis. Standalone files with
+//! no scripts or external references, so they render in any viewer and in
+//! a Markdown preview.
+
+use std::fmt::Write;
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Style {
+    /// Markers with vertical error bars.
+    Points,
+    /// A solid line through the points (theory curves).
+    Line,
+    /// A dashed line.
+    Dashed,
+    /// Open markers (values quoted from the paper).
+    Open,
+}
+
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub name: String,
+    pub style: Style,
+    /// (x, y, error bar half-height).
+    pub points: Vec<(f64, f64, f64)>,
+    /// A text beside each point (same order as `points`), or none.
+    pub labels: Vec<String>,
+}
+
+impl Series {
+    pub fn new(name: impl Into<String>, style: Style) -> Self {
+        Series {
+            name: name.into(),
+            style,
+            points: Vec::new(),
+            labels: Vec::new(),
+        }
+    }
+
+    pub fn point(mut self, x: f64, y: f64, err: f64) -> Self {
+        self.points.push((x, y, err));
+        self
+    }
+
+    pub fn labelled(mut self, x: f64, y: f64, err: f64, label: impl Into<String>) -> Self {
+        self.points.push((x, y, err));
+        self.labels.push(label.into());
+        self
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Chart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub log_x: bool,
+    pub series: Vec<Series>,
+    /// A horizontal reference line (e.g. zero shift).
+    pub y_rule: Option<f64>,
+}
+
+const COLOURS: [&str; 6] = [
+    "#1f5fa8", "#c0392b", "#2e8b57", "#8e44ad", "#d68910", "#555555",
+];
+const W: f64 = 640.0;
+const H: f64 = 400.0;
+const LEFT: f64 = 64.0;
+const RIGHT: f64 = 170.0;
+const TOP: f64 = 36.0;
+const BOTTOM: f64 = 52.0;
+
+impl Chart {
+    pub fn new(title: &str, x_label: &str, y_label: &str) -> Self {
+        Chart {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_x: false,
+            series: Vec::new(),
+            y_rule: None,
+        }
+    }
+
+    fn x_of(&self, x: f64) -> f64 {
+        if self.log_x {
+            x.max(1e-300).log10()
+        } else {
+            x
+        }
+    }
+
+    /// The chart as a standalone SVG document.
+    pub fn svg(&self) -> String {
+        let finite = |v: f64| v.is_finite();
+        let mut xs: Vec<f64> = Vec::new();
+        let mut ys: Vec<f64> = Vec::new();
+        for s in &self.series {
+            for &(x, y, e) in &s.points {
+                if finite(x) && finite(y) {
+                    xs.push(self.x_of(x));
+                    let e = if e.is_finite() { e } else { 0.0 };
+                    ys.push(y - e);
+                    ys.push(y + e);
+                }
+            }
+        }
+        if let Some(r) = self.y_rule {
+            ys.push(r);
+        }
+        let (x0, x1) = padded_range(&xs);
+        let (y0, y1) = padded_range(&ys);
+        let pw = W - LEFT - RIGHT;
+        let ph = H - TOP - BOTTOM;
+        let px = |x: f64| LEFT + (self.x_of(x) - x0) / (x1 - x0) * pw;
+        let py = |y: f64| TOP + (y1 - y) / (y1 - y0) * ph;
+
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
+        );
+        let _ = writeln!(s, r##"<rect width="100%" height="100%" fill="#ffffff"/>"##);
+        let _ = writeln!(
+            s,
+            r##"<text x="{}" y="20" font-size="14" font-weight="bold">{}</text>"##,
+            LEFT,
+            esc(&self.title)
+        );
+        // Axes and ticks.
+        let _ = writeln!(
+            s,
+            r##"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
+        );
+        for t in ticks(y0, y1) {
+            let y = py(t);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{LEFT}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#e4e4e4"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+                LEFT + pw,
+                LEFT - 6.0,
+                y + 4.0,
+                tick_label(t)
+            );
+        }
+        let xticks: Vec<(f64, String)> = if self.log_x {
+            let (a, b) = (x0.floor() as i32, x1.ceil() as i32);
+            let mut v = Vec::new();
+            for e in a..=b {
+                for m in [1.0, 2.0, 5.0] {
+                    let l = (m * 10f64.powi(e)).log10();
+                    if l >= x0 && l <= x1 {
+                        v.push((l, tick_label(m * 10f64.powi(e))));
+                    }
+                }
+            }
+            v
+        } else {
+            ticks(x0, x1)
+                .into_iter()
+                .map(|t| (t, tick_label(t)))
+                .collect()
+        };
+        for (t, label) in xticks {
+            let x = LEFT + (t - x0) / (x1 - x0) * pw;
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x:.1}" x2="{x:.1}" y1="{TOP}" y2="{}" stroke="#e4e4e4"/><text x="{x:.1}" y="{}" text-anchor="middle">{label}</text>"##,
+                TOP + ph,
+                TOP + ph + 16.0
+            );
+        }
+        let _ = writeln!(
+            s,
+            r##"<text x="{}" y="{}" text-anchor="middle">{}</text>"##,
+            LEFT + pw / 2.0,
+            H - 12.0,
+            esc(&self.x_label)
+        );
+        let _ = writeln!(
+            s,
+            r##"<text transform="translate(16 {}) rotate(-90)" text-anchor="middle">{}</text>"##,
+            TOP + ph / 2.0,
+            esc(&self.y_label)
+        );
+        if let Some(r) = self.y_rule {
+            let y = py(r);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{LEFT}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#888" stroke-dasharray="2 3"/>"##,
+                LEFT + pw
+            );
+        }
+
+        // Series.
+        for (k, series) in self.series.iter().enumerate() {
+            let c = COLOURS[k % COLOURS.len()];
+            let pts: Vec<(f64, f64, f64)> = series
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y, _)| finite(x) && finite(y))
+                .collect();
+            match series.style {
+                Style::Line | Style::Dashed => {
+                    let d: Vec<String> = pts
+                        .iter()
+                        .map(|&(x, y, _)| format!("{:.1},{:.1}", px(x), py(y)))
+                        .collect();
+                    let dash = if series.style == Style::Dashed {
+                        r#" stroke-dasharray="6 4""#
+                    } else {
+                        ""
+                    };
+                    let _ = writeln!(
+                        s,
+                        r##"<polyline points="{}" fill="none" stroke="{c}" stroke-width="1.5"{dash}/>"##,
+                        d.join(" ")
+                    );
+                }
+                Style::Points | Style::Open => {
+                    let fill = if series.style == Style::Open {
+                        "#ffffff"
+                    } else {
+                        c
+                    };
+                    for (i, &(x, y, e)) in pts.iter().enumerate() {
+                        let (cx, cy) = (px(x), py(y));
+                        if e.is_finite() && e > 0.0 {
+                            let _ = writeln!(
+                                s,
+                                r##"<line x1="{cx:.1}" x2="{cx:.1}" y1="{:.1}" y2="{:.1}" stroke="{c}"/>"##,
+                                py(y - e),
+                                py(y + e)
+                            );
+                        }
+                        let shape = if series.style == Style::Open {
+                            format!(
+                                r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{fill}" stroke="{c}" stroke-width="1.5"/>"##,
+                                cx - 4.0,
+                                cy - 4.0
+                            )
+                        } else {
+                            format!(r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="4" fill="{fill}"/>"##)
+                        };
+                        let _ = writeln!(s, "{shape}");
+                        if let Some(label) = series.labels.get(i) {
+                            let _ = writeln!(
+                                s,
+                                r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="{c}">{}</text>"##,
+                                cx + 6.0,
+                                cy - 5.0,
+                                esc(label)
+                            );
+                        }
+                    }
+                }
+            }
+            // Legend entry.
+            let ly = TOP + 14.0 + 18.0 * k as f64;
+            let lx = W - RIGHT + 14.0;
+            let mark = match series.style {
+                Style::Line => format!(
+                    r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5"/>"##,
+                    lx + 16.0
+                ),
+                Style::Dashed => format!(
+                    r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5" stroke-dasharray="6 4"/>"##,
+                    lx + 16.0
+                ),
+                Style::Points => {
+                    format!(
+                        r##"<circle cx="{}" cy="{ly}" r="4" fill="{c}"/>"##,
+                        lx + 8.0
+                    )
+                }
+                Style::Open => format!(
+                    r##"<rect x="{}" y="{}" width="8" height="8" fill="#fff" stroke="{c}" stroke-width="1.5"/>"##,
+                    lx + 4.0,
+                    ly - 4.0
+                ),
+            };
+            let _ = writeln!(
+                s,
+                r##"{mark}<text x="{}" y="{}">{}</text>"##,
+                lx + 22.0,
+                ly + 4.0,
+                esc(&series.name)
+            );
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+}
+
+/// The data range with 6 % padding (a unit range around a single value).
+fn padded_range(v: &[f64]) -> (f64, f64) {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !lo.is_finite() || !hi.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 {
+        return (lo - 0.5, hi + 0.5);
+    }
+    let pad = 0.06 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+/// Round tick values (1, 2 or 5 times a power of ten apart) inside a range.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let span = hi - lo;
+    let raw = span / 6.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 7.0)
+        .unwrap_or(10.0 * mag);
+    let mut t = (lo / step).ceil() * step;
+    let mut v = Vec::new();
+    while t <= hi + 1e-9 * step {
+        v.push(if t.abs() < 1e-9 * step { 0.0 } else { t });
+        t += step;
+    }
+    v
+}
+
+fn tick_label(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{v:.0e}")
+    } else if (v - v.round()).abs() < 1e-9 {
+        format!("{}", v.round())
+    } else {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_and_inside() {
+        let t = ticks(0.3, 9.7);
+        assert_eq!(t, vec![2.0, 4.0, 6.0, 8.0]);
+        assert!(ticks(-1.2, 1.3).contains(&0.0));
+    }
+
+    #[test]
+    fn draws_each_point_error_bar_and_legend() {
+        let mut c = Chart::new("t", "x", "y");
+        c.series.push(
+            Series::new("a & b", Style::Points)
+                .point(1.0, 2.0, 0.5)
+                .point(2.0, f64::NAN, 0.0),
+        );
+        c.series
+            .push(Series::new("theory", Style::Line).point(0.0, 0.0, 0.0));
+        let svg = c.svg();
+        // one finite point: one marker + the legend marker
+        assert_eq!(svg.matches("<circle").count(), 2);
+        assert_eq!(svg.matches("<polyline").count(), 1);
+        assert!(svg.contains("a &amp; b"));
+        assert!(!svg.contains("NaN"));
+    }
+}

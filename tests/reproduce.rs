@@ -1,0 +1,140 @@
+//! `repose reproduce --reduced` through a real server on SQLite: the report
+//! is written, every number in it equals statistics recomputed from the
+//! stored samples, and θ_R rises with μ.
+
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::process::Command;
+
+#[path = "common/mod.rs"]
+mod common;
+
+use common::{get, scratch, Server, BIN};
+
+fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (mean, var.sqrt())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_reduced_reproduction_reports_the_stored_aggregates() {
+    let db = format!("sqlite://{}", scratch("repro.db").display());
+    let server = Server::start(&db, 2);
+    let out = scratch("report").with_file_name("reproduction.md");
+    let run = Command::new(BIN)
+        .args([
+            "reproduce",
+            "--reduced",
+            "--preset",
+            "quick",
+            "-q",
+            "--server",
+        ])
+        .arg(&server.url)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("repose reproduce runs");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("Wall time of the whole reproduction"),
+        "{stdout}"
+    );
+
+    let markdown = std::fs::read_to_string(&out).expect("the report is written");
+    let numbers: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("reproduction.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(numbers["preset"], "quick");
+    for fig in [
+        "fig2a", "fig2b", "fig3", "fig4", "fig5", "fig7a", "fig7b", "k_n", "gamma_n",
+    ] {
+        let svg = std::fs::read_to_string(out.with_file_name(format!("reproduction-{fig}.svg")))
+            .unwrap_or_else(|_| panic!("no SVG for {fig}"));
+        assert!(svg.starts_with("<svg") && !svg.contains("NaN"), "{fig}");
+        assert!(
+            markdown.contains(&format!("reproduction-{fig}.svg")),
+            "{fig} not linked"
+        );
+    }
+
+    // Every point in the report against the samples the server stored.
+    let sweeps = numbers["sweeps"].as_array().unwrap();
+    assert_eq!(sweeps.len(), 6);
+    let mut checked = 0;
+    for sweep in sweeps {
+        let id = sweep["id"].as_str().unwrap();
+        let samples = get(&format!("{}/api/sweeps/{id}/samples", server.url)).await;
+        let mut by_point: BTreeMap<String, Vec<&Value>> = BTreeMap::new();
+        for s in samples["samples"].as_array().unwrap() {
+            by_point.entry(s["point"].to_string()).or_default().push(s);
+        }
+        let points = sweep["points"].as_array().unwrap();
+        assert_eq!(points.len(), by_point.len(), "{id}");
+        for p in points {
+            let stored = &by_point[&p["point"].to_string()];
+            for metric in ["theta_r", "theta_r_line", "theta_r_endpoints", "theta_t"] {
+                let values: Vec<f64> = stored.iter().filter_map(|s| s[metric].as_f64()).collect();
+                let reported = &p["metrics"][metric];
+                assert_eq!(reported["n"].as_u64().unwrap() as usize, values.len());
+                if values.len() < 2 {
+                    continue;
+                }
+                let (mean, sd) = mean_sd(&values);
+                let (rm, rs) = (
+                    reported["mean"].as_f64().unwrap(),
+                    reported["sd"].as_f64().unwrap(),
+                );
+                assert!(
+                    (rm - mean).abs() < 1e-9 && (rs - sd).abs() < 1e-6,
+                    "{id} {metric}: {rm} {rs} vs {mean} {sd}"
+                );
+                // …and the Markdown shows the same numbers.
+                let cell = format!("{mean:.2} ± {sd:.2} (n={})", values.len());
+                assert!(markdown.contains(&cell), "{cell} missing from the report");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 20, "only {checked} aggregates checked");
+
+    // The comparison table quotes the same aggregates it names.
+    let fig347 = sweeps.iter().find(|s| s["key"] == "fig347").unwrap();
+    let at = |mu: f64| {
+        fig347["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| (p["point"]["contact.mu"].as_f64().unwrap() - mu).abs() < 1e-9)
+            .unwrap()["metrics"]["theta_r"]["mean"]
+            .as_f64()
+            .unwrap()
+    };
+    let row = numbers["comparison"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["quantity"].as_str().unwrap().starts_with("θ_R method 3"))
+        .unwrap();
+    assert_eq!(row["ours"]["mean"].as_f64().unwrap(), at(0.2));
+
+    // θ_R rises with μ.
+    let (low, mid, high) = (at(0.1), at(0.2), at(0.3));
+    println!("θ_R: μ 0.1 {low:.2}°, 0.2 {mid:.2}°, 0.3 {high:.2}°");
+    assert!(high > low + 5.0, "θ_R does not rise with μ: {low} → {high}");
+
+    // The page can open the report the server carries.
+    let resp = reqwest::get(format!("{}/docs/reproduction.md", server.url))
+        .await
+        .unwrap();
+    assert!(resp.status().is_success());
+    assert!(resp.text().await.unwrap().starts_with("# Reproduction"));
+}
