@@ -246,11 +246,19 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "samples": 1,
         "fidelity": "quick"
     });
-    let (id, hash, grains, flux_hash, tilt_id, widths_id) = rt.block_on(async {
+    // A forced step of 0.3 t_c: accepted, but every fill fails a guard.
+    let coarse = json!({
+        "protocol": "fill_release",
+        "base": {"box": {"width": 1.6, "height": 1.6}, "numerics": {"dt": 2.1e-4}},
+        "samples": 1,
+        "fidelity": "quick"
+    });
+    let (id, hash, grains, flux_hash, tilt_id, widths_id, coarse_id) = rt.block_on(async {
         let id = run_sweep(&server, &spec).await;
         let flux_id = run_sweep(&server, &flux).await;
         let tilt_id = run_sweep(&server, &tilt).await;
         let widths_id = run_sweep(&server, &widths).await;
+        let coarse_id = run_sweep(&server, &coarse).await;
         let first_sample = |sweep: String| {
             let url = server.url.clone();
             async move {
@@ -265,7 +273,7 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
         let grains = report["final_state"]["grains"].as_array().unwrap().len() as u64;
         let flux_hash = first_sample(flux_id).await;
-        (id, hash, grains, flux_hash, tilt_id, widths_id)
+        (id, hash, grains, flux_hash, tilt_id, widths_id, coarse_id)
     });
 
     let mut tab = Page::launch(&chrome);
@@ -424,4 +432,25 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     );
     assert_eq!(loaded, json!(true));
     tab.screenshot("reproduction.png");
+
+    // 9. A failed sample says why, in the sweep's sample list and on its own page.
+    open(&mut tab, &format!("/sweep/{coarse_id}"));
+    let reason = wait_for(
+        &mut tab,
+        "the failed sample's reason",
+        "(() => { const r = document.querySelector('#samples tbody tr'); return r && r.querySelector('.tag.failed') && r.querySelector('.reason') && r.querySelector('.reason').textContent; })()",
+    );
+    let reason = reason.as_str().unwrap().to_string();
+    assert!(reason.contains("time step"), "{reason}");
+    tab.evaluate("document.querySelector('#samples tbody tr a').click()");
+    let shown = wait_for(
+        &mut tab,
+        "the failed sample's page",
+        "document.querySelector('#pile') && document.querySelector('.panel .tag.failed') && document.querySelector('.panel p').textContent",
+    );
+    assert!(
+        shown.as_str().unwrap().contains(&reason),
+        "{reason} / {shown}"
+    );
+    tab.screenshot("failed-sample.png");
 }

@@ -346,3 +346,62 @@ async fn submit_refuses_a_bad_spec_naming_the_field() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("axes.contact.mu"), "{stderr}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_sample_that_fails_is_stored_with_its_reason_and_no_angle() {
+    let db = format!("sqlite://{}", scratch("failing.db").display());
+    let server = Server::start(&db, 2);
+    // t_c = 7.1e-4 s for these grains: t_c/50 runs, 0.3 t_c is accepted by
+    // validation but cannot resolve a contact, and a guard stops the fill.
+    let spec = json!({
+        "name": "a time step too coarse for the contacts",
+        "protocol": "fill_release",
+        "base": {"box": {"width": 1.6, "height": 1.6}},
+        "axes": {"numerics.dt": [1.4e-5, 2.1e-4]},
+        "samples": 2,
+        "fidelity": "quick"
+    });
+    let id = common::run_sweep(&server, &spec).await;
+    let sweep = get(&format!("{}/api/sweeps/{id}", server.url)).await;
+    // The job itself ran to the end: its sample is a result, a failed one.
+    assert_eq!(sweep["progress"]["done"], 4, "{sweep}");
+
+    let samples = get(&format!("{}/api/sweeps/{id}/samples", server.url)).await;
+    let samples = samples["samples"].as_array().unwrap().clone();
+    assert_eq!(samples.len(), 4);
+    for s in &samples {
+        let coarse = s["point"]["numerics.dt"] == json!(2.1e-4);
+        if coarse {
+            assert_eq!(s["outcome"], "failed", "{s}");
+            let reason = s["reason"].as_str().unwrap_or_default();
+            assert!(reason.contains("time step"), "{s}");
+            assert!(s["theta_r"].is_null(), "a failed run reports no angle: {s}");
+            // The full report carries the same reason.
+            let hash = s["sample_hash"].as_str().unwrap();
+            let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
+            let outcome = &report["outcome"];
+            assert_eq!(outcome["status"], "failed");
+            assert_eq!(
+                format!(
+                    "{}: {}",
+                    outcome["phase"].as_str().unwrap(),
+                    outcome["reason"].as_str().unwrap()
+                ),
+                reason
+            );
+        } else {
+            assert_eq!(s["outcome"], "completed", "{s}");
+            assert!(s["theta_r"].as_f64().is_some(), "{s}");
+        }
+    }
+    let points = get(&format!("{}/api/sweeps/{id}/points", server.url)).await;
+    for p in points["points"].as_array().unwrap() {
+        let coarse = p["point"]["numerics.dt"] == json!(2.1e-4);
+        let expected = if coarse { (2, 0) } else { (0, 2) };
+        let got = (
+            p["failures"].as_u64().unwrap(),
+            p["metrics"]["theta_r"]["n"].as_u64().unwrap(),
+        );
+        assert_eq!(got, expected, "{p}");
+    }
+}

@@ -326,7 +326,8 @@ async function sweepView(id) {
       h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "Seed"), h("th", {}, "Outcome"),
         h("th", { class: "num" }, "θ_R (m3)"), h("th", { class: "num" }, "θ_T"), h("th", { class: "num" }, "grains"), h("th", { class: "num" }, "wall s"))),
       h("tbody", {}, ...samples.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.seed)),
-        h("td", {}, h("a", { href: `#/sample/${q.sample_hash}`, title: q.reason || "" }, h("span", { class: `tag ${q.outcome}` }, q.outcome))),
+        h("td", {}, h("a", { href: `#/sample/${q.sample_hash}` }, h("span", { class: `tag ${q.outcome}` }, q.outcome)),
+          q.reason ? h("div", { class: "reason muted" }, q.reason) : ""),
         h("td", { class: "num" }, fmt(q.theta_r)), h("td", { class: "num" }, fmt(q.theta_t)),
         h("td", { class: "num" }, `${q.grains_initial}→${q.grains_final}`), h("td", { class: "num" }, fmt(q.wall_time, 2))))))));
     if (!unfinished(sweep.progress)) clearInterval(timer);
@@ -387,6 +388,13 @@ async function figureView(id, name) {
 }
 
 // ---------------------------------------------------------------- one sample
+// An outcome's reason as the sample listings give it (report.rs `Outcome::reason`).
+function outcomeReason(o) {
+  if (o.phase && o.reason) return `${o.phase}: ${o.reason}`;
+  if (o.reason) return o.reason;
+  return o.phase ? `cancelled during ${o.phase}` : "";
+}
+
 async function sampleView(hash) {
   const r = await api(`/api/samples/${hash}`);
   if (!r.ok) { setView(h("h1", {}, "Sample not found"), h("p", { class: "error" }, r.body ? r.body.error : "")); return; }
@@ -420,11 +428,11 @@ async function sampleView(hash) {
   setView(
     h("h1", {}, `Sample: ${rep.protocol}, seed ${rep.seed}`),
     h("div", { class: "panel" },
-      h("p", {}, h("span", { class: `tag ${rep.outcome.status}` }, rep.outcome.status), " ", rep.outcome.reason || "",
+      h("p", {}, h("span", { class: `tag ${rep.outcome.status}` }, rep.outcome.status), " ", outcomeReason(rep.outcome),
         ` · ${rep.grains.initial} grains at start, ${rep.grains.lost} lost, ${rep.grains.final} at end · ${rep.iterations} steps, ${fmt(rep.simulated_time)} s simulated, ${fmt(rep.wall_time, 2)} s wall · ${rep.options.integrator}, normal force ${rep.options.normal_force}, shear spring ${rep.options.shear_spring} · ${rep.engine}`),
       h("table", { id: "angles" }, h("tbody", {}, ...angleRows.map(([k, v]) => h("tr", {}, h("th", {}, k), h("td", { class: "num" }, `${fmt(v)}°`)))))),
     h("div", { class: "two" },
-      h("div", {}, h("h2", {}, "Final pile, force chains (fig. 1a)"), pile),
+      h("div", {}, h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"), pile),
       h("div", {}, h("h2", {}, "Energy"), ke)),
     fluxBox,
     h("h2", {}, "Scene"),
