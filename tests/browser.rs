@@ -442,6 +442,10 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     );
     let reason = reason.as_str().unwrap().to_string();
     assert!(reason.contains("time step"), "{reason}");
+    // Every job ran (a failed sample is a stored result): the sweep has finished.
+    let state = tab.evaluate("document.querySelector('.panel .tag').textContent");
+    assert_eq!(state, json!("finished"));
+    tab.screenshot("failed-sweep.png");
     tab.evaluate("document.querySelector('#samples tbody tr a').click()");
     let shown = wait_for(
         &mut tab,

@@ -66,12 +66,20 @@ function setView(...children) {
 function progressBar(p) {
   const total = p.queued + p.running + p.done + p.failed + p.cancelled || 1;
   const span = (cls, n) => h("span", { class: cls, style: `width:${(100 * n / total).toFixed(1)}%` });
-  return h("div", { class: "bar", role: "img", "aria-label": `${p.done} done, ${p.running} running, ${p.queued} queued, ${p.failed} failed` },
+  return h("div", { class: "bar", role: "img", "aria-label": `${p.done} done, ${p.running} running, ${p.queued} queued, ${p.failed} errored` },
     span("done", p.done), span("running", p.running), span("failed", p.failed), span("cancelled", p.cancelled));
 }
 
+// Job counts. A job is done when its sample is stored, whatever the sample's
+// outcome; "errored" counts jobs whose worker gave up on them.
 function counts(p) {
-  return `${p.done} done · ${p.running} running · ${p.queued} queued · ${p.failed} failed` + (p.cancelled ? ` · ${p.cancelled} cancelled` : "");
+  return `${p.done} done · ${p.running} running · ${p.queued} queued · ${p.failed} errored` + (p.cancelled ? ` · ${p.cancelled} cancelled` : "");
+}
+
+// A sweep's state as a user reads it: an active sweep with nothing left to run has finished.
+function stateTag(s) {
+  const label = s.state === "active" ? (unfinished(s.progress) ? "running" : "finished") : s.state;
+  return h("span", { class: `tag ${label}` }, label);
 }
 
 function eta(s) {
@@ -118,7 +126,7 @@ async function sweepsView() {
       h("td", { class: "num" }, String(s.spec.samples || 1)),
       h("td", {}, progressBar(s.progress), h("div", { class: "muted" }, counts(s.progress))),
       h("td", {}, eta(s.eta_seconds)),
-      h("td", {}, h("span", { class: `tag ${s.state}` }, s.state)),
+      h("td", {}, stateTag(s)),
       h("td", {}, s.state === "active" && unfinished(s.progress)
         ? h("button", { class: "danger", onclick: () => cancel(s.id, refresh), "aria-label": `cancel ${s.name}` }, "Cancel") : "")));
     table.replaceChildren(...(rows.length ? rows : [h("tr", {}, h("td", { colspan: 8, class: "muted" }, "No sweeps yet."))]));
@@ -309,7 +317,7 @@ async function sweepView(id) {
     head.replaceChildren(
       h("h1", {}, sweep.name),
       h("div", { class: "panel" },
-        h("p", {}, h("span", { class: `tag ${sweep.state}` }, sweep.state), " ", sweep.protocol, " · ", axesSummary(sweep.spec),
+        h("p", {}, stateTag(sweep), " ", sweep.protocol, " · ", axesSummary(sweep.spec),
           " · ", `${sweep.spec.samples || 1} samples a point · fidelity ${sweep.spec.fidelity || "standard"}`),
         h("div", { class: "controls" }, progressBar(sweep.progress), h("span", {}, counts(sweep.progress)), h("span", {}, `ETA ${eta(sweep.eta_seconds)}`),
           sweep.state === "active" && unfinished(sweep.progress) ? h("button", { class: "danger", onclick: () => cancel(id, refresh) }, "Cancel sweep") : "")));
