@@ -120,6 +120,19 @@ fn bad_input_names_the_field_and_exits_non_zero() {
     let out = repose(&["run", "no/such/scene.toml"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("cannot read scene file"));
+
+    // The studies refuse a bad override before running anything.
+    let cases: &[(&[&str], &str)] = &[
+        (&["tradeoff", "--seeds", "0"], "--seeds"),
+        (&["tradeoff", "--set", "box.wdth=1"], "box.wdth"),
+        (&["tradeoff", "--set", "contact.mu=-1"], "contact.mu"),
+    ];
+    for (args, field) in cases {
+        let out = repose(&[args, &["--out", "/nonexistent/sva.md", "-q"][..]].concat());
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(field), "{args:?}: {stderr}");
+    }
 }
 
 #[test]
@@ -154,4 +167,140 @@ fn a_run_that_fails_says_why_and_exits_with_one() {
         stdout.contains("failed") && stdout.contains("energy blow-up"),
         "{stdout}"
     );
+}
+
+/// One row of the tradeoff CSV: setting, seed and the four angles (None when
+/// the run gave none).
+type Row = (String, u64, [Option<f64>; 4]);
+
+fn tradeoff_rows(csv: &str) -> Vec<Row> {
+    let mut lines = csv.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("setting,group,seed,status"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.splitn(11, ',').collect();
+            let angle = |i: usize| f[i].parse::<f64>().ok();
+            (
+                f[0].to_string(),
+                f[2].parse().unwrap(),
+                [angle(4), angle(5), angle(6), angle(7)],
+            )
+        })
+        .collect()
+}
+
+/// Mean and standard error of one angle over a setting's rows.
+fn mean_sem(rows: &[Row], setting: &str, angle: usize) -> (f64, f64, usize) {
+    let v: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.0 == setting)
+        .filter_map(|r| r.2[angle])
+        .collect();
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt(), v.len())
+}
+
+/// "Δ ± se" from a report cell.
+fn shift_cell(cell: &str) -> (f64, f64) {
+    let (d, se) = cell
+        .split_once(" ± ")
+        .unwrap_or_else(|| panic!("cell {cell:?}"));
+    (d.trim().parse().unwrap(), se.trim().parse().unwrap())
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn tradeoff_reports_the_shift_of_each_preset_from_its_own_samples() {
+    let dir = std::env::temp_dir().join(format!("repose-tradeoff-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("sva.md");
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "tradeoff",
+            "--seeds",
+            "3",
+            "--only",
+            "presets",
+            "--set",
+            "box.width=1.2",
+            "--set",
+            "box.height=1.2",
+            "-q",
+            "--out",
+        ];
+        a.push(out.to_str().unwrap());
+        a.extend_from_slice(extra);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&'static str]| {
+        let a = args(extra);
+        let out = repose(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(out.status.success(), "{}", text(&out.stderr));
+    };
+    run(&[]);
+    let read = |suffix: &str| std::fs::read_to_string(dir.join(format!("sva{suffix}"))).unwrap();
+    let (report, csv) = (read(".md"), read(".csv"));
+    for svg in ["-repose.svg", "-tilt.svg"] {
+        assert!(read(svg).starts_with("<svg"), "{svg}");
+    }
+
+    // Every setting ran every seed.
+    let rows = tradeoff_rows(&csv);
+    let settings = ["reference", "quick", "standard", "paper"];
+    for s in settings {
+        let seeds: Vec<u64> = rows.iter().filter(|r| r.0 == s).map(|r| r.1).collect();
+        assert_eq!(seeds, [1, 2, 3], "{s}");
+    }
+
+    // Each preset's row in the report is its samples' mean less the
+    // reference's, with the combined standard error, and its verdict follows
+    // the two-standard-error rule.
+    for s in &settings[1..] {
+        let line = report
+            .lines()
+            .find(|l| l.starts_with(&format!("| {s} |")))
+            .unwrap_or_else(|| panic!("no row for {s} in\n{report}"));
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        // | name | what | wall | steps | θ_R | Δθ_R | θ_T | Δθ_T | failed | verdict |
+        let mut shifted = [false; 2];
+        for (k, (angle, cell)) in [(2usize, cells[6]), (3, cells[8])].into_iter().enumerate() {
+            let (m, sem, n) = mean_sem(&rows, s, angle);
+            let (m_ref, sem_ref, _) = mean_sem(&rows, "reference", angle);
+            assert_eq!(n, 3, "{s}: {line}");
+            let (delta, se) = shift_cell(cell);
+            assert!(
+                (delta - (m - m_ref)).abs() < 0.006,
+                "{s}: {cell} against {}",
+                m - m_ref
+            );
+            let se_expected = (sem * sem + sem_ref * sem_ref).sqrt();
+            assert!(
+                (se - se_expected).abs() < 0.006,
+                "{s}: {cell} against ± {se_expected}"
+            );
+            shifted[k] = delta.abs() > 2.0 * se;
+        }
+        let verdict = cells[10];
+        assert_eq!(verdict.contains("shifts θ_R"), shifted[0], "{line}");
+        assert_eq!(verdict.contains("θ_T"), shifted[1], "{line}");
+        assert_eq!(
+            verdict == "within error",
+            shifted == [false, false],
+            "{line}"
+        );
+    }
+
+    // The same seeds give the same angles; --resume keeps every sample and
+    // runs none again.
+    run(&[]);
+    let again = read(".csv");
+    assert_eq!(tradeoff_rows(&again), rows);
+    run(&["--resume"]);
+    assert_eq!(read(".csv"), again);
+    let _ = std::fs::remove_dir_all(&dir);
 }
