@@ -218,33 +218,32 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// One row of the LAMMPS peer CSV (the columns this benchmark reads).
+#[derive(serde::Deserialize)]
+struct LammpsRow {
+    #[serde(rename = "W")]
+    w: String,
+    phase: String,
+    psteps_per_s_real: f64,
+}
+
 /// Median particle-steps/s (wall time of the whole process) per (size, phase)
 /// from the LAMMPS peer CSV.
 fn read_lammps(path: &PathBuf) -> anyhow::Result<HashMap<(String, String), f64>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name);
-    let (Some(w), Some(ph), Some(v)) = (col("W"), col("phase"), col("psteps_per_s_real")) else {
-        anyhow::bail!(
-            "{} lacks the W, phase and psteps_per_s_real columns",
-            path.display()
-        );
-    };
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut groups: HashMap<(String, String), Vec<f64>> = HashMap::new();
-    for line in lines {
-        let f: Vec<&str> = line.split(',').collect();
-        if let (Some(w), Some(ph), Some(v)) = (
-            f.get(w),
-            f.get(ph),
-            f.get(v).and_then(|x| x.parse::<f64>().ok()),
-        ) {
-            groups
-                .entry((w.to_string(), ph.to_string()))
-                .or_default()
-                .push(v);
-        }
+    for row in reader.deserialize::<LammpsRow>() {
+        let row = row.with_context(|| {
+            format!(
+                "{} lacks the W, phase and psteps_per_s_real columns",
+                path.display()
+            )
+        })?;
+        groups
+            .entry((row.w, row.phase))
+            .or_default()
+            .push(row.psteps_per_s_real);
     }
     Ok(groups
         .into_iter()

@@ -8,10 +8,10 @@
 //! 3. End-to-end speed-up of a real sweep with one worker against two.
 
 use anyhow::Context;
-use repose_physics::{run, Quiet, RunReport, Scene};
-use repose_store::spec::SweepSpec;
-use repose_store::{now_ms, Backend, Store};
-use repose_worker::{run_worker, WorkerConfig};
+use repose_physics::{run, Quiet, Scene};
+use repose_store::{now_ms, Backend, NewJob, ResultRecord, Store};
+use repose_studies::SweepSpec;
+use repose_worker::{record, run_worker, WorkerConfig};
 use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -38,16 +38,23 @@ pub struct BenchServiceArgs {
     sweep_samples: u32,
 }
 
-fn tiny_report() -> RunReport {
+/// The stored result of a tiny free run, written for every no-op job.
+fn tiny_record() -> anyhow::Result<ResultRecord> {
     let scene = Scene::from_toml(
         "protocol = \"free_run\"\nduration = 0.0001\n[[particles]]\nposition = [0.0, 0.0]\nradius = 0.1",
         &[],
-    )
-    .expect("a valid scene");
-    let mut r = run(&scene, &mut Quiet).expect("runs");
+    )?;
+    let mut r = run(&scene, &mut Quiet)?;
     r.final_state = None;
     r.energy_trace.clear();
-    r
+    Ok(record(&r)?)
+}
+
+/// Stores a sweep and its jobs.
+async fn store_sweep(store: &Store, spec: &SweepSpec) -> anyhow::Result<()> {
+    let jobs: Vec<NewJob> = spec.expand()?.iter().map(|j| j.to_new_job()).collect();
+    store.create_sweep(&spec.new_sweep(), &jobs, 3).await?;
+    Ok(())
 }
 
 fn noop_sweep(samples: u32) -> SweepSpec {
@@ -56,15 +63,13 @@ fn noop_sweep(samples: u32) -> SweepSpec {
         "base": { "duration": 0.0001, "particles": [{"position": [0.0, 0.0], "radius": 0.1}] },
         "samples": samples
     }))
-    .expect("a valid sweep")
+    .unwrap_or_else(|e| panic!("the benchmark's own sweep is valid: {e}"))
 }
 
 /// Claim + complete throughput with `claimers` concurrent tasks.
 async fn queue_overhead(store: &Store, jobs: u32, claimers: usize) -> anyhow::Result<f64> {
-    let spec = noop_sweep(jobs);
-    let expanded = spec.expand()?;
-    store.create_sweep(&spec, &expanded, 3).await?;
-    let report = tiny_report();
+    store_sweep(store, &noop_sweep(jobs)).await?;
+    let report = tiny_record()?;
     let clock = Instant::now();
     let mut tasks = Vec::new();
     for k in 0..claimers {
@@ -107,6 +112,7 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
     let batch = 250;
     let mut tx = store.pool().begin().await?;
     let (mut jobs, mut results) = (Vec::with_capacity(batch), Vec::with_capacity(batch));
+    let mut metrics = Vec::with_capacity(4 * batch);
     for k in 0..samples {
         let point = k / per_point;
         let (mu, width) = (0.05 * (point % 10) as f64, 1.0 + (point / 10) as f64);
@@ -117,11 +123,16 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
             "('{id}-j{k}', '{id}', {k}, '{{\"box.width\":{width},\"contact.mu\":{mu}}}', {seed}, {seed}, '{hash}', '{{}}', 'done', 1, 3, {now}, {now})"
         ));
         results.push(format!(
-            "('{hash}', '{id}-j{k}', 'bench', {seed}, 'completed', NULL, {a}, {b}, {theta}, {t}, NULL, NULL, NULL, 400, 100, 300, 150000, 2.0, 1.5, '{{}}', {now})",
-            a = theta + 2.0,
-            b = theta + 1.0,
-            t = 4.0 + mu
+            "('{hash}', '{id}-j{k}', 'bench', {seed}, 'completed', NULL, 400, 100, 300, 150000, 2.0, 1.5, '{{}}', {now})"
         ));
+        for (metric, v) in [
+            ("theta_r", theta),
+            ("theta_r_line", theta + 1.0),
+            ("theta_r_endpoints", theta + 2.0),
+            ("theta_t", 4.0 + mu),
+        ] {
+            metrics.push(format!("('{hash}', '{metric}', {v})"));
+        }
         if jobs.len() == batch || k + 1 == samples {
             sqlx::query(&format!(
                 "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, created_at, updated_at) VALUES {}",
@@ -130,15 +141,21 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
             .execute(&mut *tx)
             .await?;
             sqlx::query(&format!(
-                "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, theta_r_endpoints, theta_r_line, theta_r, \
-                 theta_t, theta_ms_mean, theta_ms_sd, theta_ms_max, grains_initial, grains_final, grains_lost, iterations, \
-                 simulated_time, wall_time, report, created_at) VALUES {}",
+                "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, grains_initial, grains_final, \
+                 grains_lost, iterations, simulated_time, wall_time, report, created_at) VALUES {}",
                 results.join(",")
+            ))
+            .execute(&mut *tx)
+            .await?;
+            sqlx::query(&format!(
+                "INSERT INTO metric_values (sample_hash, metric, value) VALUES {}",
+                metrics.join(",")
             ))
             .execute(&mut *tx)
             .await?;
             jobs.clear();
             results.clear();
+            metrics.clear();
         }
     }
     tx.commit().await?;
@@ -203,7 +220,7 @@ async fn sweep_time(workers: usize, samples: u32) -> anyhow::Result<f64> {
         "samples": samples,
         "fidelity": "standard"
     }))?;
-    store.create_sweep(&spec, &spec.expand()?, 3).await?;
+    store_sweep(&store, &spec).await?;
     let (_tx, rx) = tokio::sync::watch::channel(false);
     let clock = Instant::now();
     let tasks: Vec<_> = (0..workers)

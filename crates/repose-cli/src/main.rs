@@ -1,4 +1,5 @@
-//! `repose`: run granular-pile scenes and benchmark the engine.
+//! `repose`: run granular-pile scenes, benchmark the engine, serve and
+//! drive the sweep service, and reproduce the papers.
 //!
 //! ```text
 //! repose run examples/fill_release.toml
@@ -6,13 +7,13 @@
 //! repose run examples/fill_release.toml --snapshot pile.svg --trace ke.csv
 //! repose bench
 //! repose serve                      # API + workers on sqlite://repose.db
-//! repose submit sweeps/figure3.toml --wait
+//! repose submit sweeps/smoke.toml --wait
 //! repose worker --database postgres://host/db
+//! repose reproduce --preset quick
 //! ```
 
 mod bench;
 mod bench_service;
-mod chart;
 mod output;
 mod reproduce;
 mod service;
@@ -22,7 +23,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use repose_physics::report::Phase;
-use repose_physics::{Observer, Progress, RunReport, Scene};
+use repose_physics::{protocols, Observer, Progress, RunReport, Scene};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -31,7 +32,7 @@ use std::process::ExitCode;
 #[command(
     name = "repose",
     version,
-    about = "Angle-of-repose simulations of granular piles (Lee & Herrmann 1993)"
+    about = "Parameter studies of granular piles: the angle of repose, simulated and served"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -209,75 +210,67 @@ fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn summary(r: &RunReport) -> String {
-    use std::fmt::Write;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "protocol      {} (seed {}, {:?})",
-        r.protocol.name(),
-        r.seed,
-        r.rng
-    );
-    let _ = writeln!(s, "outcome       {}", r.outcome.status());
+    let mut lines: Vec<(String, String)> = vec![
+        (
+            "protocol".into(),
+            format!(
+                "{} ({}D, model {}, seed {}, {:?})",
+                r.protocol, r.dimension, r.model, r.seed, r.rng
+            ),
+        ),
+        ("outcome".into(), r.outcome.status().into()),
+    ];
     if let Some(reason) = r.outcome.reason() {
-        let _ = writeln!(s, "reason        {reason}");
+        lines.push(("reason".into(), reason));
     }
-    if let Some(a) = r.repose {
-        let _ = writeln!(
-            s,
-            "θ_R           {:.2}° (method 3)   method 1: {:.2}°   method 2: {:.2}°",
-            a.cumulative_fit, a.endpoints, a.line_fit
-        );
-    }
-    if let Some(t) = r.tilt {
-        let _ = writeln!(
-            s,
-            "θ_T           {:.2}° ({} grains moved)",
-            t.angle, t.moved
-        );
-    }
-    if let Some(f) = &r.flux {
-        if let Some(st) = f.steady {
-            let _ = writeln!(
-                s,
-                "θ pile        {:.2}° ± {:.2}° over {} insertions (max {:.2}°)",
-                st.mean,
-                st.sd,
-                st.n,
-                f.max.unwrap_or(f64::NAN)
-            );
+    let declared = protocols::find(&r.protocol)
+        .map(|p| p.metrics())
+        .unwrap_or_default();
+    for m in declared {
+        if let Some(v) = r.metric(m.name) {
+            lines.push((m.label.into(), format!("{v:.2}{}   ({})", m.unit, m.name)));
         }
     }
-    let _ = writeln!(
-        s,
-        "theory        θ_MS = atan(3μ) = {:.2}°",
-        r.theory.marginal_stability
-    );
-    if let Some(t) = r.theory.tilting {
-        let _ = writeln!(s, "              θ_T by eq. (4) = {t:.2}°");
+    for (k, q) in r.theory.iter().enumerate() {
+        let head = if k == 0 { "theory" } else { "" };
+        lines.push((head.into(), format!("{} = {:.2}°", q.label, q.value)));
     }
     let g = r.grains;
-    let _ = writeln!(
-        s,
-        "grains        {} at start, {} added, {} lost, {} at end",
-        g.initial, g.inserted, g.lost, g.remaining
-    );
-    let _ = writeln!(
-        s,
-        "time          {} steps of {:.3e} s = {:.3} s simulated in {:.2} s ({:.2} M particle-steps/s)",
-        r.iterations,
-        r.options.dt,
-        r.simulated_time,
-        r.wall_time,
-        r.particle_steps_per_second / 1e6
-    );
-    let _ = writeln!(
-        s,
-        "options       preset {}, integrator {}, normal force {}, shear spring {}",
+    lines.push((
+        "grains".into(),
+        format!(
+            "{} at start, {} added, {} lost, {} at end",
+            g.initial, g.inserted, g.lost, g.remaining
+        ),
+    ));
+    lines.push((
+        "time".into(),
+        format!(
+            "{} steps of {:.3e} s = {:.3} s simulated in {:.2} s ({:.2} M particle-steps/s)",
+            r.iterations,
+            r.options.dt,
+            r.simulated_time,
+            r.wall_time,
+            r.particle_steps_per_second / 1e6
+        ),
+    ));
+    let mut options = format!(
+        "preset {}, integrator {}",
         r.options.preset.as_deref().unwrap_or("none"),
-        r.options.integrator,
-        r.options.normal_force,
-        r.options.shear_spring
+        r.options.integrator
     );
-    s
+    for (k, v) in &r.options.physics {
+        options.push_str(&format!(", {} {v}", k.replace('_', " ")));
+    }
+    lines.push(("options".into(), options));
+    let width = lines
+        .iter()
+        .map(|(h, _)| h.chars().count())
+        .max()
+        .unwrap_or(0)
+        + 2;
+    lines
+        .into_iter()
+        .map(|(h, text)| format!("{h:<width$}{text}\n"))
+        .collect()
 }

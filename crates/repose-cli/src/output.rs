@@ -1,27 +1,36 @@
 //! Files a run can write: an SVG of the pile with force chains (the paper's
 //! fig. 1a), a CSV of the kinetic-energy trace (fig. 1b) and a legacy VTK
-//! file for ParaView.
+//! file for ParaView. In 3D the snapshot is the side view along y.
 
 use repose_physics::RunReport;
 use std::collections::HashMap;
 use std::fmt::Write;
 
-/// The final pile: discs, lines between touching centres with a width
-/// proportional to the normal force, the walls, and the measured surface.
+/// A coordinate of a listed vector (0 past its end).
+fn at(v: &[f64], k: usize) -> f64 {
+    v.get(k).copied().unwrap_or(0.0)
+}
+
+/// The final pile: discs (spheres seen from the side in 3D), lines between
+/// touching centres with a width proportional to the normal force, the
+/// walls, and the measured surface.
 pub fn snapshot_svg(r: &RunReport) -> String {
     let Some(state) = &r.final_state else {
         return String::new();
     };
-    let width = r.scene.container.width;
+    let up = r.dimension.max(1) - 1;
+    let cell = &r.scene.sections.get("box");
+    let num = |k: &str| cell.and_then(|b| b[k].as_f64()).unwrap_or(0.0);
+    let width = num("width");
     let grains = &state.grains;
     let (mut xmin, mut xmax, mut ymax) = (0.0f64, width, 0.0f64);
     for g in grains {
-        xmin = xmin.min(g.position.x - g.radius);
-        xmax = xmax.max(g.position.x + g.radius);
-        ymax = ymax.max(g.position.y + g.radius);
+        xmin = xmin.min(at(&g.position, 0) - g.radius);
+        xmax = xmax.max(at(&g.position, 0) + g.radius);
+        ymax = ymax.max(at(&g.position, up) + g.radius);
     }
     let ymin = -0.1;
-    ymax = ymax.max(r.scene.container.fill_height()) + 0.1;
+    ymax = ymax.max(num("height")) + 0.1;
     xmin -= 0.1;
     xmax += 0.1;
     let scale = 800.0 / (xmax - xmin).max(1e-9);
@@ -38,16 +47,20 @@ pub fn snapshot_svg(r: &RunReport) -> String {
     let _ = writeln!(
         s,
         r##"<title>{} seed {}: {} grains</title>"##,
-        r.protocol.name(),
+        r.protocol,
         r.seed,
         grains.len()
     );
-    // walls
+    // walls, seen edge-on: those whose normal lies in the drawn plane
     for wall in &state.walls {
-        let n = wall.normal;
-        let t = nalgebra::Vector2::new(n.y, -n.x);
+        let (nx, ny) = (at(&wall.normal, 0), at(&wall.normal, up));
+        if r.dimension == 3 && at(&wall.normal, 1).abs() > 1e-9 {
+            continue;
+        }
+        let p = nalgebra::Vector2::new(at(&wall.point, 0), at(&wall.point, up));
+        let t = nalgebra::Vector2::new(ny, -nx).normalize();
         let far = 1e3;
-        let (mut a, mut b) = (wall.point - t * far, wall.point + t * far);
+        let (mut a, mut b) = (p - t * far, p + t * far);
         for l in &wall.limits {
             if l.axis == 0 {
                 if let Some(m) = l.min {
@@ -74,8 +87,8 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         let _ = writeln!(
             s,
             r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="#e8dcc0" stroke="#b8a57a" stroke-width="0.6"/>"##,
-            px(g.position.x),
-            py(g.position.y),
+            px(at(&g.position, 0)),
+            py(at(&g.position, up)),
             g.radius * scale
         );
     }
@@ -90,15 +103,15 @@ pub fn snapshot_svg(r: &RunReport) -> String {
             let _ = writeln!(
                 s,
                 r##"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="#202020" stroke-width="{:.2}" stroke-linecap="round"/>"##,
-                px(ga.position.x),
-                py(ga.position.y),
-                px(gb.position.x),
-                py(gb.position.y),
+                px(at(&ga.position, 0)),
+                py(at(&ga.position, up)),
+                px(at(&gb.position, 0)),
+                py(at(&gb.position, up)),
                 0.3 + 5.0 * c.force / fmax
             );
         }
     }
-    if let (Some(surface), Some(angles)) = (&r.surface, r.repose) {
+    if let (Some(surface), Some(angle)) = (r.profiles.first(), r.metric("theta_r")) {
         let pts: Vec<String> = surface
             .x
             .iter()
@@ -114,7 +127,7 @@ pub fn snapshot_svg(r: &RunReport) -> String {
             s,
             r##"<text x="{:.0}" y="24" font-family="sans-serif" font-size="18" text-anchor="end" fill="#c0392b">θ_R = {:.1}° (method 3)</text>"##,
             w - 10.0,
-            angles.cumulative_fit
+            angle
         );
     }
     s.push_str("</svg>\n");
@@ -139,18 +152,20 @@ pub fn trace_csv(r: &RunReport) -> String {
     s
 }
 
-/// Legacy VTK polydata: one point per grain with radius, velocity and id.
+/// Legacy VTK polydata: one point per grain with radius, id, velocity and
+/// (for rotating grains) angular velocity; 2D grains lie in the plane z = 0.
 pub fn vtk(r: &RunReport) -> String {
     let Some(state) = &r.final_state else {
         return String::new();
     };
     let g = &state.grains;
+    let xyz = |v: &[f64]| format!("{} {} {}", at(v, 0), at(v, 1), at(v, 2));
     let mut s = String::new();
     let _ = writeln!(s, "# vtk DataFile Version 3.0");
-    let _ = writeln!(s, "repose {} seed {}", r.protocol.name(), r.seed);
+    let _ = writeln!(s, "repose {} seed {}", r.protocol, r.seed);
     let _ = writeln!(s, "ASCII\nDATASET POLYDATA\nPOINTS {} double", g.len());
     for p in g {
-        let _ = writeln!(s, "{} {} 0", p.position.x, p.position.y);
+        let _ = writeln!(s, "{}", xyz(&p.position));
     }
     let _ = writeln!(s, "VERTICES {} {}", g.len(), 2 * g.len());
     for k in 0..g.len() {
@@ -167,7 +182,18 @@ pub fn vtk(r: &RunReport) -> String {
     }
     let _ = writeln!(s, "VECTORS velocity double");
     for p in g {
-        let _ = writeln!(s, "{} {} 0", p.velocity.x, p.velocity.y);
+        let _ = writeln!(s, "{}", xyz(&p.velocity));
+    }
+    if g.iter().any(|p| !p.angular_velocity.is_empty()) {
+        let _ = writeln!(s, "VECTORS angular_velocity double");
+        for p in g {
+            // A 2D grain turns about z.
+            let w = match p.angular_velocity.as_slice() {
+                [z] => format!("0 0 {z}"),
+                v => xyz(v),
+            };
+            let _ = writeln!(s, "{w}");
+        }
     }
     s
 }

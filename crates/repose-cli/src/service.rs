@@ -230,20 +230,13 @@ pub fn worker(args: WorkerArgs) -> anyhow::Result<ExitCode> {
     })
 }
 
-/// Reads a sweep spec from TOML or JSON.
+/// Reads a sweep spec from TOML or JSON (the scene documents' reader).
 fn read_spec(path: &PathBuf) -> anyhow::Result<Value> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let is_json =
-        path.extension().is_some_and(|e| e == "json") || text.trim_start().starts_with('{');
-    if is_json {
-        serde_json::from_str(&text).with_context(|| format!("{} is not valid JSON", path.display()))
-    } else {
-        let table: toml::Table = text
-            .parse()
-            .with_context(|| format!("{} is not valid TOML", path.display()))?;
-        Ok(serde_json::to_value(table)?)
-    }
+    let doc = repose_physics::doc::parse(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}: {}", path.display(), e.field, e.message))?;
+    Ok(Value::Object(doc))
 }
 
 /// Posts a sweep spec; returns the answer's status and JSON body.
@@ -331,19 +324,36 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
             tokio::time::sleep(Duration::from_millis(500)).await;
         }
         let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
-        print!("{}", points_table(&points));
+        let protocol = spec["protocol"].as_str().unwrap_or_default();
+        print!("{}", points_table(&points, protocol));
         Ok(ExitCode::SUCCESS)
     })
 }
 
-fn points_table(points: &Value) -> String {
+/// Each point's sample counts and the two leading metrics of the protocol.
+fn points_table(points: &Value, protocol: &str) -> String {
     use std::fmt::Write;
+    let metrics: Vec<(&str, String)> = repose_physics::protocols::find(protocol)
+        .map(|p| p.metrics())
+        .unwrap_or_default()
+        .iter()
+        .filter(|m| {
+            // The leading metrics that some point measured.
+            points["points"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .any(|p| p["metrics"][m.name]["n"].as_i64().unwrap_or(0) > 0)
+        })
+        .take(2)
+        .map(|m| (m.name, format!("{} ± sd", m.label)))
+        .collect();
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<40} {:>4} {:>5}  {:>16} {:>16}",
-        "point", "n", "fail", "θ_R (m3) ± sd", "θ_T ± sd"
-    );
+    let _ = write!(s, "{:<40} {:>4} {:>5}", "point", "n", "fail");
+    for (_, head) in &metrics {
+        let _ = write!(s, "  {head:>16}");
+    }
+    s.push('\n');
     for p in points["points"].as_array().into_iter().flatten() {
         let stat = |m: &str| {
             let a = &p["metrics"][m];
@@ -353,15 +363,17 @@ fn points_table(points: &Value) -> String {
                 _ => "-".into(),
             }
         };
-        let _ = writeln!(
+        let _ = write!(
             s,
-            "{:<40} {:>4} {:>5}  {:>16} {:>16}",
+            "{:<40} {:>4} {:>5}",
             p["point"].to_string(),
             p["samples"].as_i64().unwrap_or(0),
             p["failures"].as_i64().unwrap_or(0),
-            stat("theta_r"),
-            stat("theta_t")
         );
+        for (m, _) in &metrics {
+            let _ = write!(s, "  {:>16}", stat(m));
+        }
+        s.push('\n');
     }
     s
 }
@@ -401,7 +413,10 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
                     sweep["progress"]
                 );
                 let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
-                print!("{}", points_table(&points));
+                print!(
+                    "{}",
+                    points_table(&points, sweep["protocol"].as_str().unwrap_or_default())
+                );
             }
         }
         Ok(ExitCode::SUCCESS)

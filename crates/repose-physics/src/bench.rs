@@ -5,8 +5,10 @@
 use crate::contact::ContactLaw;
 use crate::engine::{Simulation, StageCounters};
 use crate::integrate::Integrator;
-use crate::protocol::{with_engine, EngineJob, Quiet, Runner};
-use crate::scene::{Protocol, Scene, SceneError};
+use crate::models::{with_engine, EngineJob, Laws};
+use crate::protocols::pile::{self, Pile, PileSpec, FILL};
+use crate::protocols::Quiet;
+use crate::scene::{Scene, SceneError};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -31,7 +33,7 @@ pub fn throughput(
     settled_steps: u64,
     flow_steps: u64,
 ) -> Result<Vec<PhaseThroughput>, SceneError> {
-    if scene.protocol != Protocol::FillRelease {
+    if scene.protocol != "fill_release" {
         return Err(SceneError::single(
             "protocol",
             "the benchmark runs a fill_release scene",
@@ -39,17 +41,22 @@ pub fn throughput(
     }
     scene.validate()?;
     let scene = scene.resolved();
-    with_engine(
+    let spec = PileSpec::of(&scene)?;
+    with_engine::<2, _>(
         &scene,
         Job {
+            scene: &scene,
+            spec,
             settled_steps,
             flow_steps,
         },
-    )
+    )?
     .map_err(|reason| SceneError::single("(run)", reason))
 }
 
-struct Job {
+struct Job<'a> {
+    scene: &'a Scene,
+    spec: PileSpec,
     settled_steps: u64,
     flow_steps: u64,
 }
@@ -77,24 +84,20 @@ fn timed<L: ContactLaw<2>, I: Integrator<2>>(
     })
 }
 
-impl EngineJob for Job {
+impl EngineJob<2> for Job<'_> {
     type Output = Result<Vec<PhaseThroughput>, String>;
 
-    fn run<L: ContactLaw<2>, I: Integrator<2>>(
-        self,
-        scene: &Scene,
-        sim: Simulation<2, L, I>,
-    ) -> Self::Output {
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> Self::Output {
         let mut quiet = Quiet;
-        let mut runner = Runner::new(sim, scene, &mut quiet);
+        let sim = pile::closed_box::<L, I>(self.scene, &self.spec, laws);
+        let cap = self.spec.eq.max_fill_time;
+        let mut pile = Pile::new(sim, self.scene, self.spec, &mut quiet);
         // Settle with the right wall in place, then time the closed box.
-        let cap = scene.equilibrium.max_fill_time;
-        runner
-            .settle_fill()
+        pile.settle(FILL, cap)
             .map_err(|_| format!("the filled box did not settle within {cap} s"))?;
-        let settled = timed(&mut runner.sim, "settled", self.settled_steps)?;
-        runner.open_right_side();
-        let flow = timed(&mut runner.sim, "flow", self.flow_steps)?;
+        let settled = timed(&mut pile.run.sim, "settled", self.settled_steps)?;
+        pile.open_right_side();
+        let flow = timed(&mut pile.run.sim, "flow", self.flow_steps)?;
         Ok(vec![settled, flow])
     }
 }

@@ -7,10 +7,14 @@
 //! Cundall–Strack spring is a signed scalar along `s` (the normal turned a
 //! quarter turn clockwise, as Lee & Herrmann define it); in 3D it is a plane,
 //! and the spring is a vector that must be turned with the contact.
+//!
+//! Rotation differs the same way: an angular velocity or a torque is a
+//! scalar about the axis normal to the plane in 2D and a vector in 3D
+//! ([`Space::Angular`]).
 
 use nalgebra::SVector;
 use std::fmt::Debug;
-use std::ops::{Add, Mul};
+use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
 /// A position, velocity or force in `D` dimensions (CGS units).
 pub type Vector<const D: usize> = SVector<f64, D>;
@@ -43,6 +47,44 @@ pub trait Space<const D: usize>: 'static {
 
     /// Length of a shear quantity.
     fn magnitude(s: Self::Shear) -> f64;
+
+    /// An angular velocity or torque: a scalar about the out-of-plane axis
+    /// in 2D, a vector in 3D.
+    type Angular: Copy
+        + Default
+        + Debug
+        + PartialEq
+        + Send
+        + Sync
+        + Add<Output = Self::Angular>
+        + Sub<Output = Self::Angular>
+        + Neg<Output = Self::Angular>
+        + AddAssign
+        + Mul<f64, Output = Self::Angular>;
+
+    /// `ω × r`: the velocity a rotation `ω` gives a point at offset `r`.
+    fn spin_velocity(omega: Self::Angular, r: &Vector<D>) -> Vector<D>;
+
+    /// `r × F`: the torque of a force `F` applied at offset `r`.
+    fn moment(r: &Vector<D>, force: &Vector<D>) -> Self::Angular;
+
+    /// The part of an angular velocity that is not a twist about `n`.
+    fn without_twist(omega: Self::Angular, n: &Vector<D>) -> Self::Angular;
+
+    /// Squared length of an angular quantity.
+    fn angular_norm_squared(w: Self::Angular) -> f64;
+
+    /// The angular quantity as a plain list (one value in 2D, three in 3D).
+    fn angular_components(w: Self::Angular) -> Vec<f64>;
+
+    /// Reads an angular quantity from a plain list; `None` if its length is wrong.
+    fn angular_from(values: &[f64]) -> Option<Self::Angular>;
+
+    /// The angular quantity as three numbers (2D: the value, then zeros).
+    fn angular_array(w: Self::Angular) -> [f64; 3];
+
+    /// The inverse of [`Space::angular_array`].
+    fn angular_from_array(a: [f64; 3]) -> Self::Angular;
 }
 
 /// The clockwise unit tangent `s` of Lee & Herrmann for the normal `n`.
@@ -73,6 +115,50 @@ impl Space<2> for Dim<2> {
     #[inline(always)]
     fn magnitude(s: f64) -> f64 {
         s.abs()
+    }
+
+    type Angular = f64;
+
+    #[inline(always)]
+    fn spin_velocity(omega: f64, r: &Vector<2>) -> Vector<2> {
+        Vector::<2>::new(-omega * r.y, omega * r.x)
+    }
+
+    #[inline(always)]
+    fn moment(r: &Vector<2>, force: &Vector<2>) -> f64 {
+        r.x * force.y - r.y * force.x
+    }
+
+    #[inline(always)]
+    fn without_twist(omega: f64, _n: &Vector<2>) -> f64 {
+        // In the plane every rotation rolls; there is no twist about n.
+        omega
+    }
+
+    #[inline(always)]
+    fn angular_norm_squared(w: f64) -> f64 {
+        w * w
+    }
+
+    fn angular_components(w: f64) -> Vec<f64> {
+        vec![w]
+    }
+
+    fn angular_from(values: &[f64]) -> Option<f64> {
+        match values {
+            [w] => Some(*w),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn angular_array(w: f64) -> [f64; 3] {
+        [w, 0.0, 0.0]
+    }
+
+    #[inline(always)]
+    fn angular_from_array(a: [f64; 3]) -> f64 {
+        a[0]
     }
 }
 
@@ -108,6 +194,49 @@ impl Space<3> for Dim<3> {
     fn magnitude(s: Vector<3>) -> f64 {
         s.norm()
     }
+
+    type Angular = Vector<3>;
+
+    #[inline(always)]
+    fn spin_velocity(omega: Vector<3>, r: &Vector<3>) -> Vector<3> {
+        omega.cross(r)
+    }
+
+    #[inline(always)]
+    fn moment(r: &Vector<3>, force: &Vector<3>) -> Vector<3> {
+        r.cross(force)
+    }
+
+    #[inline(always)]
+    fn without_twist(omega: Vector<3>, n: &Vector<3>) -> Vector<3> {
+        omega - n * omega.dot(n)
+    }
+
+    #[inline(always)]
+    fn angular_norm_squared(w: Vector<3>) -> f64 {
+        w.norm_squared()
+    }
+
+    fn angular_components(w: Vector<3>) -> Vec<f64> {
+        w.iter().copied().collect()
+    }
+
+    fn angular_from(values: &[f64]) -> Option<Vector<3>> {
+        match values {
+            [x, y, z] => Some(Vector::<3>::new(*x, *y, *z)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn angular_array(w: Vector<3>) -> [f64; 3] {
+        [w.x, w.y, w.z]
+    }
+
+    #[inline(always)]
+    fn angular_from_array(a: [f64; 3]) -> Vector<3> {
+        Vector::<3>::new(a[0], a[1], a[2])
+    }
 }
 
 #[cfg(test)]
@@ -120,6 +249,31 @@ mod tests {
         assert_eq!(clockwise_tangent(&n), Vector::<2>::new(0.0, -1.0));
         let n = Vector::<2>::new(0.0, 1.0);
         assert_eq!(clockwise_tangent(&n), Vector::<2>::new(1.0, 0.0));
+    }
+
+    #[test]
+    fn rotation_in_the_plane_matches_the_z_component_of_the_3d_products() {
+        let r2 = Vector::<2>::new(0.3, -0.2);
+        let f2 = Vector::<2>::new(1.5, 0.7);
+        let r3 = Vector::<3>::new(0.3, -0.2, 0.0);
+        let f3 = Vector::<3>::new(1.5, 0.7, 0.0);
+        let w = 2.0;
+        let m2 = <Dim<2> as Space<2>>::moment(&r2, &f2);
+        let m3 = <Dim<3> as Space<3>>::moment(&r3, &f3);
+        assert!((m2 - m3.z).abs() < 1e-15);
+        let v2 = <Dim<2> as Space<2>>::spin_velocity(w, &r2);
+        let v3 = <Dim<3> as Space<3>>::spin_velocity(Vector::<3>::new(0.0, 0.0, w), &r3);
+        assert!((v2.x - v3.x).abs() < 1e-15 && (v2.y - v3.y).abs() < 1e-15);
+    }
+
+    #[test]
+    fn twist_about_the_normal_is_removed() {
+        let n = Vector::<3>::new(0.0, 0.0, 1.0);
+        let w = Vector::<3>::new(1.0, 2.0, 3.0);
+        assert_eq!(
+            <Dim<3> as Space<3>>::without_twist(w, &n),
+            Vector::<3>::new(1.0, 2.0, 0.0)
+        );
     }
 
     #[test]

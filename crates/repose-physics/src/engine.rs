@@ -6,7 +6,8 @@
 //! 2. **neighbours**: grains past the outlet leave, and the Verlet list and
 //!    wall candidates are rebuilt if any grain moved more than half the skin;
 //! 3. **contacts**: gravity, then every touching pair (springs of opened
-//!    contacts are reset here);
+//!    contacts are reset here), and every pair across a gap within the
+//!    law's range when the law acts at a distance;
 //! 4. **walls**: every grain touching a wall;
 //!
 //! then **integrate (correct)** and the guards. [`StageCounters`] times each
@@ -16,7 +17,7 @@
 //! index order on one thread, so the same scene and seed give bit-identical
 //! results on the same build and machine.
 
-use crate::contact::{ContactLaw, Touch};
+use crate::contact::{ContactLaw, Response, Touch};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::neighbors::NeighborList;
@@ -140,6 +141,10 @@ where
         dt: f64,
         skin: f64,
     ) -> Self {
+        let mut particles = particles;
+        if particles.rotating() != L::ROTATES {
+            particles.set_rotating(L::ROTATES);
+        }
         let integrator = I::new(&particles, dt);
         let (walls, wall_laws): (Vec<_>, Vec<_>) = walls.into_iter().unzip();
         let nwalls = walls.len();
@@ -231,7 +236,12 @@ where
     /// Rebuilds the Verlet list and wall candidates now (normally done only
     /// when a grain has moved half the skin).
     pub fn rebuild_lists(&mut self) {
-        self.neighbors.rebuild(&self.particles);
+        let range = if L::ACTS_ACROSS_GAPS {
+            self.pair_law.range()
+        } else {
+            0.0
+        };
+        self.neighbors.rebuild(&self.particles, range);
         self.wall_contacts
             .rebuild(&self.walls, &self.particles, self.neighbors.skin);
         self.counters.list_builds += 1;
@@ -284,6 +294,11 @@ where
         self.wall_contacts.history.remove(k);
     }
 
+    /// Kinetic energy of translation and rotation.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.particles.kinetic_energy() + self.particles.rotational_energy()
+    }
+
     /// Adds a grain (at rest or moving) during a run; returns its id.
     pub fn insert(&mut self, pos: Vector<D>, vel: Vector<D>, radius: f64, mass: f64) -> u32 {
         let id = self.particles.push(pos, vel, radius, mass);
@@ -304,6 +319,9 @@ where
         for i in 0..p.len() {
             p.force[i] = self.gravity * p.mass[i];
         }
+        if L::ROTATES {
+            p.torque.fill(Default::default());
+        }
         let law = self.pair_law;
         let dt = self.dt;
         let mut worst = 0.0f64;
@@ -319,25 +337,24 @@ where
             if dist2 >= reach * reach {
                 // The contact is open: its spring is gone.
                 history[k] = Default::default();
+                if L::ACTS_ACROSS_GAPS {
+                    let limit = reach + law.range();
+                    if dist2 < limit * limit {
+                        let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
+                        apply(p, i, j, &law.gap_force(&touch), L::ROTATES);
+                    }
+                }
                 continue;
             }
             let dist = dist2.sqrt();
-            let overlap = reach - dist;
-            let fraction = overlap / p.radius[i].min(p.radius[j]);
+            let touch = pair_touch(p, i, j, r, dist, L::ROTATES);
+            let fraction = touch.overlap / p.radius[i].min(p.radius[j]);
             if fraction > worst {
                 worst = fraction;
                 worst_pair = k;
             }
-            let (mi, mj) = (p.mass[i], p.mass[j]);
-            let touch = Touch {
-                normal: r * (1.0 / dist),
-                overlap,
-                velocity: p.vel[i] - p.vel[j],
-                m_eff: mi * mj / (mi + mj),
-            };
-            let f = law.force(&touch, &mut history[k], dt);
-            p.force[i] += f;
-            p.force[j] -= f;
+            let response = law.force(&touch, &mut history[k], dt);
+            apply(p, i, j, &response, L::ROTATES);
         }
         self.max_overlap_seen = self.max_overlap_seen.max(worst);
         if worst > self.guards.max_overlap {
@@ -377,14 +394,12 @@ where
                 }
                 let fraction = overlap / p.radius[i];
                 self.max_overlap_seen = self.max_overlap_seen.max(fraction);
-                let touch = Touch {
-                    normal: wall.normal,
-                    overlap,
-                    velocity: p.vel[i],
-                    m_eff: p.mass[i],
-                };
-                let f = law.force(&touch, &mut history[k], dt);
-                p.force[i] += f;
+                let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
+                let response = law.force(&touch, &mut history[k], dt);
+                p.force[i] += response.force;
+                if L::ROTATES {
+                    p.torque[i] += response.torque_i;
+                }
             }
         }
         Ok(())
@@ -484,18 +499,98 @@ where
             let dist = r.norm();
             let overlap = p.radius[i] + p.radius[j] - dist;
             if overlap > 0.0 && dist > 0.0 {
-                let (mi, mj) = (p.mass[i], p.mass[j]);
-                let touch = Touch {
-                    normal: r / dist,
-                    overlap,
-                    velocity: p.vel[i] - p.vel[j],
-                    m_eff: mi * mj / (mi + mj),
-                };
+                let mut touch = pair_touch(p, i, j, r, dist, L::ROTATES);
+                touch.normal = r / dist;
                 let mut h = self.neighbors.history[k];
-                let f = self.pair_law.force(&touch, &mut h, 0.0);
+                let f = self.pair_law.force(&touch, &mut h, 0.0).force;
                 out.push((i, j, f.dot(&touch.normal).abs()));
             }
         }
         out
+    }
+}
+
+/// The pair `(i, j)` with `r = x_i − x_j` at distance `dist`, seen from `i`.
+#[inline(always)]
+fn pair_touch<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    j: usize,
+    r: Vector<D>,
+    dist: f64,
+    rotating: bool,
+) -> Touch<D>
+where
+    Dim<D>: Space<D>,
+{
+    let (ai, aj) = (p.radius[i], p.radius[j]);
+    let (mi, mj) = (p.mass[i], p.mass[j]);
+    Touch {
+        normal: r * (1.0 / dist),
+        overlap: (ai + aj) - dist,
+        velocity: p.vel[i] - p.vel[j],
+        m_eff: mi * mj / (mi + mj),
+        r_eff: ai * aj / (ai + aj),
+        radius_i: ai,
+        radius_j: aj,
+        omega_i: if rotating {
+            p.omega[i]
+        } else {
+            Default::default()
+        },
+        omega_j: if rotating {
+            p.omega[j]
+        } else {
+            Default::default()
+        },
+    }
+}
+
+/// Grain `i` against a wall with unit normal `normal`: a partner of zero
+/// radius and infinite mass that does not turn.
+#[inline(always)]
+fn wall_touch<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    normal: Vector<D>,
+    overlap: f64,
+    rotating: bool,
+) -> Touch<D>
+where
+    Dim<D>: Space<D>,
+{
+    Touch {
+        normal,
+        overlap,
+        velocity: p.vel[i],
+        m_eff: p.mass[i],
+        r_eff: p.radius[i],
+        radius_i: p.radius[i],
+        radius_j: 0.0,
+        omega_i: if rotating {
+            p.omega[i]
+        } else {
+            Default::default()
+        },
+        omega_j: Default::default(),
+    }
+}
+
+/// Adds a pair's response to both grains.
+#[inline(always)]
+fn apply<const D: usize>(
+    p: &mut Particles<D>,
+    i: usize,
+    j: usize,
+    response: &Response<D>,
+    rotating: bool,
+) where
+    Dim<D>: Space<D>,
+{
+    p.force[i] += response.force;
+    p.force[j] -= response.force;
+    if rotating {
+        p.torque[i] += response.torque_i;
+        p.torque[j] += response.torque_j;
     }
 }

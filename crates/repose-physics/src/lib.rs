@@ -1,21 +1,27 @@
 //! # repose-physics
 //!
-//! A discrete-element engine for the granular piles of Lee & Herrmann
-//! (1993): discs with Hertz normal contacts and Cundall–Strack static
-//! friction, the three protocols that measure the angle of repose θ_R, the
-//! tilting angle θ_T and the angle of marginal stability θ_MS, and the
-//! theory they are compared with.
+//! A discrete-element engine for granular piles: grains with contact laws
+//! built from components, integrators, neighbour search, walls, and the
+//! protocols that measure a pile — for now those of Lee & Herrmann (1993),
+//! which measure the angle of repose θ_R, the tilting angle θ_T and the
+//! angle of marginal stability θ_MS — with the theory they are compared with.
 //!
 //! ## Design
 //!
 //! * **Pure.** This crate knows nothing of databases, HTTP, threads or
 //!   async. A [`Scene`] goes in, a [`RunReport`] comes out; the same scene
 //!   and seed give the same numbers.
-//! * **Generic over the dimension** ([`dim::Space`]) and **over the contact
-//!   law** ([`contact::ContactLaw`], built from a normal and a tangential
-//!   component) and the **integrator** ([`integrate::Integrator`]). Each
-//!   run-time option of a scene selects a compiled variant in
-//!   [`protocol::with_engine`], so an option that is off costs nothing.
+//! * **Plug-ins at the seams.** A protocol ([`protocols::Protocol`]) and a
+//!   contact model ([`models::Model`]) each live in one module and declare
+//!   what the rest of the project needs: their scene sections with defaults
+//!   and checks, and the protocol's metrics. Registering one is one line.
+//! * **Generic over the dimension** ([`dim::Space`]: discs in a plane,
+//!   spheres in space) and **over the contact law** ([`contact::ContactLaw`],
+//!   built from normal, tangential, rolling and cohesion components, with or
+//!   without rotation) and the **integrator** ([`integrate::Integrator`]).
+//!   A model picks the compiled engine for a scene's options from one flat
+//!   list ([`models::lee_herrmann::with_engine`]), so an option that is off
+//!   costs nothing.
 //! * **A visible pipeline.** [`engine::Simulation::step`] runs predict →
 //!   neighbours → contacts → walls → correct, and
 //!   [`engine::StageCounters`] times each stage.
@@ -29,13 +35,15 @@
 pub mod bench;
 pub mod contact;
 pub mod dim;
+pub mod doc;
 pub mod engine;
 pub mod integrate;
 pub mod measure;
+pub mod models;
 pub mod neighbors;
 pub mod particles;
 pub mod preset;
-pub mod protocol;
+pub mod protocols;
 pub mod report;
 pub mod scene;
 pub mod setup;
@@ -43,6 +51,6 @@ pub mod theory;
 pub mod walls;
 
 pub use preset::Preset;
-pub use protocol::{run, Observer, Progress, Quiet};
+pub use protocols::{run, Metric, Observer, Progress, Protocol, Quiet};
 pub use report::{Outcome, RunReport, ENGINE};
-pub use scene::{Protocol, Scene, SceneError};
+pub use scene::{FieldError, Scene, SceneError};

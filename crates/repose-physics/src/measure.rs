@@ -1,19 +1,10 @@
-//! Measuring a pile: the surface profile `h(x)` and its slope by the three
-//! methods of Lee & Herrmann (section 3).
+//! Measuring a pile: the surface profile `h(x)` along a horizontal axis and
+//! its slope by the three methods of Lee & Herrmann (section 3), in any
+//! dimension (the vertical axis is the last one: y in 2D, z in 3D).
 
 use crate::dim::Vector;
+pub use crate::report::Profile;
 use serde::{Deserialize, Serialize};
-
-/// The pile's surface: the highest grain top in each column of the box.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Surface {
-    /// Column width (the mean grain diameter, adjusted to tile `[0, W]`), cm.
-    pub cell_width: f64,
-    /// Column centres, cm.
-    pub x: Vec<f64>,
-    /// Highest grain top in each column (0 for an empty column), cm.
-    pub h: Vec<f64>,
-}
 
 /// The slope of one pile by each method, as angles in degrees (positive
 /// when the surface falls towards the open side, +x).
@@ -28,28 +19,38 @@ pub struct SlopeAngles {
     pub cumulative_fit: f64,
 }
 
-impl Surface {
-    /// Builds the profile over `[0, width]` from grain centres and radii;
-    /// a grain belongs to the column holding its centre. Grains outside the
-    /// box are ignored.
-    pub fn measure(pos: &[Vector<2>], radius: &[f64], width: f64) -> Surface {
+impl Profile {
+    /// Builds the profile over `[lo, hi]` along `axis` from grain centres
+    /// and radii, in columns one mean diameter wide; a grain belongs to the
+    /// column holding its centre, and its top is its height plus its radius
+    /// along the last axis. Grains outside `[lo, hi)` are ignored.
+    pub fn measure<const D: usize>(
+        pos: &[Vector<D>],
+        radius: &[f64],
+        axis: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Profile {
         let mean_d = if radius.is_empty() {
             0.2
         } else {
             2.0 * radius.iter().sum::<f64>() / radius.len() as f64
         };
+        let width = hi - lo;
         let cells = ((width / mean_d).round() as usize).max(2);
         let w = width / cells as f64;
         let mut h = vec![0.0f64; cells];
         for (x, r) in pos.iter().zip(radius) {
-            if x.x < 0.0 || x.x >= width {
+            let along = x[axis] - lo;
+            if along < 0.0 || along >= width {
                 continue;
             }
-            let k = ((x.x / w) as usize).min(cells - 1);
-            h[k] = h[k].max(x.y + r);
+            let k = ((along / w) as usize).min(cells - 1);
+            h[k] = h[k].max(x[D - 1] + r);
         }
-        let xs = (0..cells).map(|k| (k as f64 + 0.5) * w).collect();
-        Surface {
+        let xs = (0..cells).map(|k| lo + (k as f64 + 0.5) * w).collect();
+        Profile {
+            axis,
             cell_width: w,
             x: xs,
             h,
@@ -197,12 +198,13 @@ impl Stats {
 mod tests {
     use super::*;
 
-    fn surface_of(f: impl Fn(f64) -> f64) -> Surface {
+    fn surface_of(f: impl Fn(f64) -> f64) -> Profile {
         let cells = 20;
         let w = 0.2;
         let x: Vec<f64> = (0..cells).map(|k| (k as f64 + 0.5) * w).collect();
         let h = x.iter().map(|&x| f(x)).collect();
-        Surface {
+        Profile {
+            axis: 0,
             cell_width: w,
             x,
             h,
@@ -235,11 +237,25 @@ mod tests {
             Vector::<2>::new(3.9, 0.1),
         ];
         let radius = vec![0.1, 0.1, 0.1];
-        let s = Surface::measure(&pos, &radius, 4.0);
+        let s = Profile::measure(&pos, &radius, 0, 0.0, 4.0);
         assert_eq!(s.h.len(), 20);
         assert!((s.h[0] - 0.4).abs() < 1e-12);
         assert!((s.h[19] - 0.2).abs() < 1e-12);
         assert_eq!(s.h[5], 0.0);
+    }
+
+    #[test]
+    fn a_profile_in_3d_projects_along_either_horizontal_axis() {
+        // Two spheres: one at (0.1, 0.9) high, one at (0.9, 0.1) low.
+        let pos = vec![
+            Vector::<3>::new(0.1, 0.9, 0.5),
+            Vector::<3>::new(0.9, 0.1, 0.1),
+        ];
+        let radius = vec![0.1, 0.1];
+        let along_x = Profile::measure(&pos, &radius, 0, 0.0, 1.0);
+        let along_y = Profile::measure(&pos, &radius, 1, 0.0, 1.0);
+        assert!((along_x.h[0] - 0.6).abs() < 1e-12 && (along_x.h[4] - 0.2).abs() < 1e-12);
+        assert!((along_y.h[0] - 0.2).abs() < 1e-12 && (along_y.h[4] - 0.6).abs() < 1e-12);
     }
 
     #[test]

@@ -8,8 +8,12 @@
 //! rebuild can hand every live spring to the new list by a merge of two
 //! sorted sequences; nothing is lost, nothing is looked up by hashing.
 //! A spring is reset to its default the moment its contact opens.
+//!
+//! A contact law that acts across gaps (cohesion) has a range: pairs whose
+//! gap is below `range + skin` enter the list, so every pair within range
+//! is always listed.
 
-use crate::dim::Vector;
+use crate::dim::{Dim, Space, Vector};
 use crate::particles::Particles;
 
 /// Verlet pair list with one contact-history slot per pair.
@@ -45,7 +49,10 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
 
     /// True once a grain has moved more than half the skin since the last
     /// build (or the number of grains changed).
-    pub fn is_stale(&self, p: &Particles<D>) -> bool {
+    pub fn is_stale(&self, p: &Particles<D>) -> bool
+    where
+        Dim<D>: Space<D>,
+    {
         if self.anchor.len() != p.len() {
             return true;
         }
@@ -76,8 +83,12 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
     }
 
     /// Rebuilds the list from the current positions, keeping every live
-    /// contact history.
-    pub fn rebuild(&mut self, p: &Particles<D>) {
+    /// contact history. `range` is the largest gap across which the
+    /// contact law acts (0 for contact-only laws).
+    pub fn rebuild(&mut self, p: &Particles<D>, range: f64)
+    where
+        Dim<D>: Space<D>,
+    {
         // Live springs, already sorted by pair.
         self.merged.clear();
         for (pair, h) in self.pairs.iter().zip(&self.history) {
@@ -87,7 +98,7 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         }
 
         let max_radius = p.radius.iter().copied().fold(0.0, f64::max);
-        self.grid.bin(&p.pos, 2.0 * max_radius + self.skin);
+        self.grid.bin(&p.pos, 2.0 * max_radius + range + self.skin);
 
         self.pairs.clear();
         let skin = self.skin;
@@ -98,7 +109,7 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
             let scratch = &mut self.scratch;
             self.grid.for_each_near(i, |j| {
                 if j as usize > i {
-                    let reach = ri + p.radius[j as usize] + skin;
+                    let reach = ri + p.radius[j as usize] + range + skin;
                     if (xi - p.pos[j as usize]).norm_squared() < reach * reach {
                         scratch.push(j);
                     }

@@ -1,57 +1,59 @@
 //! Grains stored as a structure of arrays, so the hot loops stream through
 //! contiguous positions, velocities and forces.
+//!
+//! Rotation is optional: a simulation whose contact law exerts no torque
+//! keeps the angular arrays empty, and no loop touches them.
 
-use crate::dim::Vector;
+use crate::dim::{Dim, Space, Vector};
 use serde::{Deserialize, Serialize};
 
-/// One grain as it enters or leaves a simulation (input and output format).
+/// One grain as a document: how scenes list grains and how reports give
+/// the final state, in any dimension (vectors are plain lists).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Grain<const D: usize> {
+pub struct Grain {
     /// Stable identity, kept through removals and insertions.
     #[serde(default)]
     pub id: u32,
-    /// Centre position (cm).
-    #[serde(with = "array_vec")]
-    pub position: Vector<D>,
-    /// Velocity (cm/s).
-    #[serde(default = "Vector::zeros", with = "array_vec")]
-    pub velocity: Vector<D>,
-    /// Radius (cm).
+    /// Centre position.
+    pub position: Vec<f64>,
+    /// Velocity (zero if not given).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub velocity: Vec<f64>,
+    /// Angular velocity: one value (about the out-of-plane axis) in 2D,
+    /// three in 3D; zero if not given. Only simulations with rotation use it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub angular_velocity: Vec<f64>,
     pub radius: f64,
 }
 
-/// Serialise a nalgebra vector as a plain JSON/TOML array `[x, y]`.
-pub(crate) mod array_vec {
-    use super::Vector;
-    use serde::de::Error;
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer, const D: usize>(
-        v: &Vector<D>,
-        s: S,
-    ) -> Result<S::Ok, S::Error> {
-        s.collect_seq(v.iter())
+impl Grain {
+    /// The position as a vector of dimension `D`, if it has `D` components.
+    pub fn position_in<const D: usize>(&self) -> Option<Vector<D>> {
+        vector_from(&self.position)
     }
 
-    pub fn deserialize<'de, De: Deserializer<'de>, const D: usize>(
-        d: De,
-    ) -> Result<Vector<D>, De::Error> {
-        let values = Vec::<f64>::deserialize(d)?;
-        if values.len() != D {
-            return Err(De::Error::custom(format!(
-                "expected {D} components, found {}",
-                values.len()
-            )));
+    /// The velocity as a vector of dimension `D` (zero when not given).
+    pub fn velocity_in<const D: usize>(&self) -> Option<Vector<D>> {
+        if self.velocity.is_empty() {
+            return Some(Vector::zeros());
         }
-        Ok(Vector::<D>::from_iterator(values))
+        vector_from(&self.velocity)
     }
+}
+
+/// A vector of dimension `D` from a plain list, if the lengths agree.
+pub fn vector_from<const D: usize>(values: &[f64]) -> Option<Vector<D>> {
+    (values.len() == D).then(|| Vector::<D>::from_iterator(values.iter().copied()))
 }
 
 /// All grains of a simulation. Index `i` is an array slot and may change when
 /// grains leave; `id[i]` is the grain's stable name.
-#[derive(Debug, Clone, Default)]
-pub struct Particles<const D: usize> {
+#[derive(Debug, Clone)]
+pub struct Particles<const D: usize>
+where
+    Dim<D>: Space<D>,
+{
     pub id: Vec<u32>,
     pub pos: Vec<Vector<D>>,
     pub vel: Vec<Vector<D>>,
@@ -60,10 +62,71 @@ pub struct Particles<const D: usize> {
     pub radius: Vec<f64>,
     pub mass: Vec<f64>,
     pub inv_mass: Vec<f64>,
+    /// Angular velocity (empty unless the grains rotate).
+    pub omega: Vec<<Dim<D> as Space<D>>::Angular>,
+    /// Torque of the current step (empty unless the grains rotate).
+    pub torque: Vec<<Dim<D> as Space<D>>::Angular>,
+    /// `1 / I` with the sphere's `I = 2/5 m a²` (empty unless the grains rotate).
+    pub inv_inertia: Vec<f64>,
+    rotating: bool,
     next_id: u32,
 }
 
-impl<const D: usize> Particles<D> {
+impl<const D: usize> Default for Particles<D>
+where
+    Dim<D>: Space<D>,
+{
+    fn default() -> Self {
+        Particles::new(false)
+    }
+}
+
+impl<const D: usize> Particles<D>
+where
+    Dim<D>: Space<D>,
+{
+    /// No grains yet; `rotating` says whether they carry angular state.
+    pub fn new(rotating: bool) -> Self {
+        Particles {
+            id: Vec::new(),
+            pos: Vec::new(),
+            vel: Vec::new(),
+            force: Vec::new(),
+            radius: Vec::new(),
+            mass: Vec::new(),
+            inv_mass: Vec::new(),
+            omega: Vec::new(),
+            torque: Vec::new(),
+            inv_inertia: Vec::new(),
+            rotating,
+            next_id: 0,
+        }
+    }
+
+    /// Whether the grains carry angular velocity and torque.
+    pub fn rotating(&self) -> bool {
+        self.rotating
+    }
+
+    /// Gives every grain angular state (at rest) or takes it away.
+    pub fn set_rotating(&mut self, rotating: bool) {
+        self.rotating = rotating;
+        self.omega.clear();
+        self.torque.clear();
+        self.inv_inertia.clear();
+        if rotating {
+            let n = self.len();
+            self.omega.resize(n, Default::default());
+            self.torque.resize(n, Default::default());
+            self.inv_inertia.extend(
+                self.mass
+                    .iter()
+                    .zip(&self.radius)
+                    .map(|(m, a)| 1.0 / (0.4 * m * a * a)),
+            );
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.pos.len()
     }
@@ -94,6 +157,11 @@ impl<const D: usize> Particles<D> {
         self.radius.push(radius);
         self.mass.push(mass);
         self.inv_mass.push(1.0 / mass);
+        if self.rotating {
+            self.omega.push(Default::default());
+            self.torque.push(Default::default());
+            self.inv_inertia.push(1.0 / (0.4 * mass * radius * radius));
+        }
         self.next_id = self.next_id.max(id + 1);
     }
 
@@ -115,13 +183,28 @@ impl<const D: usize> Particles<D> {
         filter(&mut self.radius, keep);
         filter(&mut self.mass, keep);
         filter(&mut self.inv_mass, keep);
+        if self.rotating {
+            filter(&mut self.omega, keep);
+            filter(&mut self.torque, keep);
+            filter(&mut self.inv_inertia, keep);
+        }
     }
 
+    /// Translational kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
         self.vel
             .iter()
             .zip(&self.mass)
             .map(|(v, m)| 0.5 * m * v.norm_squared())
+            .sum()
+    }
+
+    /// Rotational kinetic energy (zero without rotation).
+    pub fn rotational_energy(&self) -> f64 {
+        self.omega
+            .iter()
+            .zip(&self.inv_inertia)
+            .map(|(w, inv_i)| 0.5 * <Dim<D> as Space<D>>::angular_norm_squared(*w) / inv_i)
             .sum()
     }
 
@@ -140,12 +223,18 @@ impl<const D: usize> Particles<D> {
         self.radius.iter().sum::<f64>() / self.len() as f64
     }
 
-    pub fn grains(&self) -> Vec<Grain<D>> {
+    /// The grains as documents.
+    pub fn grains(&self) -> Vec<Grain> {
         (0..self.len())
             .map(|i| Grain {
                 id: self.id[i],
-                position: self.pos[i],
-                velocity: self.vel[i],
+                position: self.pos[i].iter().copied().collect(),
+                velocity: self.vel[i].iter().copied().collect(),
+                angular_velocity: self
+                    .omega
+                    .get(i)
+                    .map(|w| <Dim<D> as Space<D>>::angular_components(*w))
+                    .unwrap_or_default(),
                 radius: self.radius[i],
             })
             .collect()

@@ -1,16 +1,16 @@
 //! Named fidelity presets: concrete numerics for a chosen speed/accuracy trade.
 //!
-//! A scene names a preset with `preset = "quick"`; the preset then fills in
-//! every setting it owns that the scene does not set itself, so an explicit
-//! value always wins. The resolved scene (what results store) carries both
-//! the preset's name and every concrete value it stood for.
+//! A scene names a preset with `preset = "quick"`; its protocol then fills
+//! in every setting the preset stands for that the scene does not set itself
+//! ([`crate::protocols::Protocol::preset`]), so an explicit value always
+//! wins. The resolved scene (what results store) carries both the preset's
+//! name and every concrete value it stood for.
 //!
-//! What each preset costs and how far it moves θ_R and θ_T from the most
-//! accurate settings is measured by `repose tradeoff` and written up in
+//! What each preset costs and how far it moves the measured angles from the
+//! most accurate settings is measured by `repose tradeoff` and written up in
 //! `docs/speed-vs-accuracy.md`.
 
 use serde::{Deserialize, Serialize};
-use serde_json::{Map, Value};
 use std::fmt;
 use std::str::FromStr;
 
@@ -39,44 +39,14 @@ impl Preset {
         }
     }
 
-    /// The scene values this preset sets, as dotted keys.
-    pub fn settings(self) -> Vec<(&'static str, Value)> {
-        match self {
-            Preset::Quick => vec![
-                ("numerics.integrator", Value::from("verlet")),
-                ("numerics.dt_factor", Value::from(0.05)),
-                ("equilibrium.hold", Value::from(0.05)),
-                ("equilibrium.check_interval", Value::from(0.01)),
-            ],
-            Preset::Standard => vec![
-                ("numerics.integrator", Value::from("verlet")),
-                ("numerics.dt_factor", Value::from(0.02)),
-            ],
-            Preset::Paper => vec![
-                ("numerics.integrator", Value::from("gear5")),
-                ("numerics.dt_factor", Value::from(0.02)),
-            ],
-        }
-    }
-
-    /// One line for help texts.
-    pub fn describe(self) -> String {
-        let parts: Vec<String> = self
-            .settings()
+    /// One line for help texts: the settings it stands for in a protocol.
+    pub fn describe(self, protocol: &dyn crate::protocols::Protocol) -> String {
+        let parts: Vec<String> = protocol
+            .preset(self)
             .iter()
             .map(|(k, v)| format!("{k} = {v}"))
             .collect();
         format!("{}: {}", self.name(), parts.join(", "))
-    }
-
-    /// Writes this preset's settings into a scene document wherever the
-    /// document leaves them unset.
-    pub fn fill(self, doc: &mut Map<String, Value>) {
-        for (key, value) in self.settings() {
-            if !has_path(doc, key) {
-                set_path(doc, key, value).expect("preset keys are well formed");
-            }
-        }
     }
 }
 
@@ -96,62 +66,41 @@ impl FromStr for Preset {
     }
 }
 
-/// Sets a dotted key in a JSON object, creating tables on the way.
-pub fn set_path(doc: &mut Map<String, Value>, key: &str, value: Value) -> Result<(), String> {
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err("empty segment in the key".into());
-    }
-    let mut table = doc;
-    for part in &parts[..parts.len() - 1] {
-        let entry = table
-            .entry(part.to_string())
-            .or_insert_with(|| Value::Object(Map::new()));
-        table = match entry {
-            Value::Object(t) => t,
-            _ => return Err(format!("`{part}` is not a table")),
-        };
-    }
-    table.insert(parts[parts.len() - 1].to_string(), value);
-    Ok(())
-}
-
-/// Whether a dotted key is set (to anything but null) in a JSON object.
-pub fn has_path(doc: &Map<String, Value>, key: &str) -> bool {
-    let mut table = doc;
-    let parts: Vec<&str> = key.split('.').collect();
-    for (k, part) in parts.iter().enumerate() {
-        match table.get(*part) {
-            None | Some(Value::Null) => return false,
-            Some(Value::Object(t)) if k + 1 < parts.len() => table = t,
-            Some(_) => return k + 1 == parts.len(),
-        }
-    }
-    false
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::scene::Scene;
 
     #[test]
     fn fills_only_what_the_document_leaves_unset() {
-        let mut doc = json!({"numerics": {"integrator": "gear5"}})
-            .as_object()
-            .unwrap()
-            .clone();
-        Preset::Quick.fill(&mut doc);
-        assert_eq!(doc["numerics"]["integrator"], "gear5");
-        assert_eq!(doc["numerics"]["dt_factor"], 0.05);
-        assert_eq!(doc["equilibrium"]["hold"], 0.05);
+        let s = Scene::from_toml(
+            "protocol = \"fill_release\"\npreset = \"quick\"\n[numerics]\nintegrator = \"gear5\"",
+            &[],
+        )
+        .unwrap();
+        assert_eq!(s.numerics.integrator.name(), "gear5");
+        assert_eq!(s.numerics.dt_factor, 0.05);
+        assert_eq!(s.sections["equilibrium"]["hold"], 0.05);
+    }
+
+    #[test]
+    fn a_preset_over_a_value_that_is_not_a_table_names_the_field() {
+        let err = Scene::from_toml(
+            "protocol = \"flux\"\nnumerics = 1",
+            &["preset=quick".into()],
+        )
+        .unwrap_err();
+        assert_eq!(err.errors[0].field, "numerics", "{err}");
     }
 
     #[test]
     fn names_round_trip() {
         for p in Preset::ALL {
             assert_eq!(p.name().parse::<Preset>().unwrap(), p);
-            assert_eq!(serde_json::to_value(p).unwrap(), json!(p.name()));
+            assert_eq!(
+                serde_json::to_value(p).unwrap(),
+                serde_json::json!(p.name())
+            );
         }
         assert!("fast".parse::<Preset>().unwrap_err().contains("fast"));
     }

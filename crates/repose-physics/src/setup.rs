@@ -6,7 +6,7 @@
 //! whatever versions of those crates a build resolves.
 
 use crate::dim::Vector;
-use crate::scene::GrainSpec;
+use crate::models::lee_herrmann::GrainSpec;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 

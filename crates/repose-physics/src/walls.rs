@@ -3,22 +3,56 @@
 //! foot of its centre on the plane lies inside `[lo, hi]` (componentwise).
 //! A bounded floor is how the fill-and-release box ends at `x = W`.
 
-use crate::dim::Vector;
-use crate::particles::Particles;
+use crate::dim::{Dim, Space, Vector};
+use crate::particles::{vector_from, Particles};
 use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// A wall in the engine.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Wall<const D: usize> {
-    /// Any point of the plane, cm.
-    #[serde(with = "crate::particles::array_vec")]
+    /// Any point of the plane.
     pub point: Vector<D>,
     /// Unit normal towards the grains (normalised on construction).
-    #[serde(with = "crate::particles::array_vec")]
     pub normal: Vector<D>,
+    /// Bounds of the wall's extent, if any (empty: an infinite plane).
+    pub limits: Vec<Limit>,
+}
+
+/// A wall as a document: how scenes list walls and reports give them back,
+/// in any dimension (vectors are plain lists).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// Any point of the plane.
+    pub point: Vec<f64>,
+    /// Normal towards the grains (need not be of unit length).
+    pub normal: Vec<f64>,
     /// Bounds of the wall's extent, if any (empty: an infinite plane).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub limits: Vec<Limit>,
+}
+
+impl WallSpec {
+    /// The engine's wall, if the vectors have `D` components and the normal is not zero.
+    pub fn to_wall<const D: usize>(&self) -> Option<Wall<D>> {
+        let point = vector_from::<D>(&self.point)?;
+        let normal = vector_from::<D>(&self.normal)?;
+        (normal.norm() > 0.0).then(|| Wall {
+            point,
+            normal: normal.normalize(),
+            limits: self.limits.clone(),
+        })
+    }
+}
+
+impl<const D: usize> From<&Wall<D>> for WallSpec {
+    fn from(w: &Wall<D>) -> Self {
+        WallSpec {
+            point: w.point.iter().copied().collect(),
+            normal: w.normal.iter().copied().collect(),
+            limits: w.limits.clone(),
+        }
+    }
 }
 
 /// The foot of a grain on a wall must satisfy `min ≤ foot[axis] ≤ max`.
@@ -99,7 +133,10 @@ impl<H: Copy + Default + PartialEq> WallContacts<H> {
     }
 
     /// Re-selects the candidates of every wall, keeping live histories.
-    pub fn rebuild<const D: usize>(&mut self, walls: &[Wall<D>], p: &Particles<D>, skin: f64) {
+    pub fn rebuild<const D: usize>(&mut self, walls: &[Wall<D>], p: &Particles<D>, skin: f64)
+    where
+        Dim<D>: Space<D>,
+    {
         self.candidates.resize(walls.len(), Vec::new());
         self.history.resize(walls.len(), Vec::new());
         for (w, wall) in walls.iter().enumerate() {

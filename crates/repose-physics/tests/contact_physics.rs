@@ -78,7 +78,7 @@ radius = {a}
     let report = run(&scene, &mut Quiet).expect("runs");
     assert!(report.outcome.is_completed(), "{:?}", report.outcome);
     let g = report.final_state.expect("final state").grains;
-    (g[1].velocity.x - g[0].velocity.x) / v
+    (g[1].velocity[0] - g[0].velocity[0]) / v
 }
 
 /// The damping force jumps from zero to `γ_n m_e v` when a contact opens,
@@ -137,20 +137,20 @@ fn head_on_collision_restitution_matches_the_contact_equation() {
 
 /// Grains bouncing in a closed box without dissipation or gravity.
 fn elastic_gas<I: Integrator<2>>() -> Simulation<2, Pairwise<HertzDamped<true>, Frictionless>, I> {
-    let law = Pairwise {
-        normal: HertzDamped::<true> {
+    let law = Pairwise::new(
+        HertzDamped::<true> {
             k_n: 1e6,
             gamma_n: 0.0,
         },
-        tangential: Frictionless,
-    };
-    let wall_law = Pairwise {
-        normal: HertzDamped::<true> {
+        Frictionless,
+    );
+    let wall_law = Pairwise::new(
+        HertzDamped::<true> {
             k_n: 2e6,
             gamma_n: 0.0,
         },
-        tangential: Frictionless,
-    };
+        Frictionless,
+    );
     let mut stream = Stream::new(5);
     let mut p = Particles::<2>::default();
     for row in 0..6 {
@@ -247,7 +247,7 @@ normal = [0.0, 1.0]
     let report = run(&scene, &mut Quiet).expect("runs");
     assert!(report.outcome.is_completed(), "{:?}", report.outcome);
     let grain = &report.final_state.unwrap().grains[0];
-    (grain.position.x, grain.velocity.x)
+    (grain.position[0], grain.velocity[0])
 }
 
 #[test]
@@ -296,17 +296,17 @@ type Strack = Pairwise<HertzDamped<true>, CundallStrack<false>>;
 
 /// Two grains pressed together by their approach, sliding past each other.
 fn glancing_pair<I: Integrator<2>>() -> Simulation<2, Strack, I> {
-    let law = Pairwise {
-        normal: HertzDamped::<true> {
+    let law = Pairwise::new(
+        HertzDamped::<true> {
             k_n: 1e6,
             gamma_n: 500.0,
         },
-        tangential: CundallStrack::<false> {
+        CundallStrack::<false> {
             k_s: 1e4,
             gamma_s: 5.0,
             mu: 0.5,
         },
-    };
+    );
     let mut p = Particles::<2>::default();
     let m = sphere_mass(1.0, 0.1);
     p.push(
@@ -333,10 +333,10 @@ fn shear_spring_survives_list_rebuilds_and_is_removed_on_separation() {
         plain.step().unwrap();
         rebuilt.step().unwrap();
         rebuilt.rebuild_lists();
-        let spring = plain.neighbors.history[0].displacement;
+        let spring = plain.neighbors.history[0].0.displacement;
         assert_eq!(
             spring.to_bits(),
-            rebuilt.neighbors.history[0].displacement.to_bits()
+            rebuilt.neighbors.history[0].0.displacement.to_bits()
         );
         assert_eq!(plain.particles.pos, rebuilt.particles.pos);
         saw_spring |= spring != 0.0;
@@ -347,7 +347,7 @@ fn shear_spring_survives_list_rebuilds_and_is_removed_on_separation() {
     let gap = (plain.particles.pos[0] - plain.particles.pos[1]).norm() - 0.2;
     assert!(gap > 0.0, "still touching");
     if let Some(h) = plain.neighbors.history.first() {
-        assert_eq!(h.displacement, 0.0);
+        assert_eq!(h.0.displacement, 0.0);
     }
 }
 
@@ -355,17 +355,17 @@ fn shear_spring_survives_list_rebuilds_and_is_removed_on_separation() {
 fn spheres_in_3d_rebound_like_discs_in_2d() {
     // The engine is generic over the dimension: the same head-on collision
     // along x in 3D gives the same restitution as in 2D.
-    let law = Pairwise {
-        normal: HertzDamped::<true> {
+    let law = Pairwise::new(
+        HertzDamped::<true> {
             k_n: 1e6,
             gamma_n: 500.0,
         },
-        tangential: CundallStrack::<false> {
+        CundallStrack::<false> {
             k_s: 1e4,
             gamma_s: 5.0,
             mu: 0.2,
         },
-    };
+    );
     let m = sphere_mass(1.0, 0.1);
     let mut p3 = Particles::<3>::default();
     p3.push(

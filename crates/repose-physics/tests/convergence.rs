@@ -46,13 +46,13 @@ fn reference_height(y0: f64, gamma: f64) -> f64 {
 }
 
 fn engine_height<I: Integrator<2>>(y0: f64, gamma: f64, steps: u64) -> f64 {
-    let law = Pairwise {
-        normal: HertzDamped::<true> {
+    let law = Pairwise::new(
+        HertzDamped::<true> {
             k_n: K_WALL,
             gamma_n: gamma,
         },
-        tangential: Frictionless,
-    };
+        Frictionless,
+    );
     let mut p = Particles::<2>::default();
     p.push(
         Vector::<2>::new(0.0, y0),

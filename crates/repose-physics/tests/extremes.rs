@@ -6,7 +6,9 @@
 use repose_physics::contact::ContactLaw;
 use repose_physics::engine::{Blowup, Simulation};
 use repose_physics::integrate::Integrator;
-use repose_physics::protocol::{with_engine, EngineJob};
+use repose_physics::models::{with_engine, EngineJob, Laws};
+use repose_physics::protocols::pile::{closed_box, BoxSpec, PileSpec};
+use repose_physics::protocols::tilt::TiltSpec;
 use repose_physics::report::Outcome;
 use repose_physics::{run, Quiet, RunReport, Scene};
 
@@ -33,18 +35,14 @@ fn run_scene(text: &str, overrides: &[&str]) -> RunReport {
 fn assert_clean(r: &RunReport, what: &str) {
     match &r.outcome {
         Outcome::Completed => {
-            let a = r
-                .repose
-                .unwrap_or_else(|| panic!("{what}: completed without θ_R"));
-            for v in [a.endpoints, a.line_fit, a.cumulative_fit] {
-                assert!(v.is_finite() && v.abs() <= 90.0, "{what}: θ_R = {v}");
+            for m in ["theta_r_endpoints", "theta_r_line", "theta_r"] {
+                let v = r
+                    .metric(m)
+                    .unwrap_or_else(|| panic!("{what}: completed without {m}"));
+                assert!(v.is_finite() && v.abs() <= 90.0, "{what}: {m} = {v}");
             }
-            if let Some(t) = r.tilt {
-                assert!(
-                    t.angle.is_finite() && t.angle >= 0.0,
-                    "{what}: θ_T = {}",
-                    t.angle
-                );
+            if let Some(t) = r.metric("theta_t") {
+                assert!(t.is_finite() && t >= 0.0, "{what}: θ_T = {t}");
             }
         }
         other => {
@@ -52,9 +50,15 @@ fn assert_clean(r: &RunReport, what: &str) {
             assert!(!reason.is_empty(), "{what}: {other:?} without a reason");
             let in_tilt = matches!(other, Outcome::Failed { phase, .. } | Outcome::NotSettled { phase, .. } if phase == "tilt");
             if !in_tilt && !matches!(other, Outcome::NoOnset { .. }) {
-                assert!(r.repose.is_none(), "{what}: θ_R reported from a failed run");
+                assert!(
+                    r.metric("theta_r").is_none(),
+                    "{what}: θ_R reported from a failed run"
+                );
             }
-            assert!(r.tilt.is_none(), "{what}: θ_T reported from a failed run");
+            assert!(
+                r.metric("theta_t").is_none(),
+                "{what}: θ_T reported from a failed run"
+            );
         }
     }
 }
@@ -104,9 +108,8 @@ fn friction_from_zero_to_five() {
     let flat = run_scene(SMALL, &["contact.mu=0"]);
     assert_clean(&flat, "μ = 0");
     let flat = flat
-        .repose
-        .expect("a frictionless pile is measured")
-        .cumulative_fit;
+        .metric("theta_r")
+        .expect("a frictionless pile is measured");
     // Frictionless discs flow out flat (a slope of at most a grain per box width).
     assert!(flat.abs() < (0.2f64 / 1.6).atan().to_degrees(), "{flat}");
     let mut unmeasurable = 0;
@@ -116,7 +119,7 @@ fn friction_from_zero_to_five() {
         println!(
             "{mu}: {} {:?} {:?}",
             r.outcome.status(),
-            r.repose.map(|a| a.cumulative_fit),
+            r.metric("theta_r"),
             r.outcome.reason()
         );
         match r.outcome {
@@ -141,7 +144,7 @@ fn narrow_tall_and_flat_boxes() {
         println!(
             "{w} × {h}: {} {:?} {:?}",
             r.outcome.status(),
-            r.repose.map(|a| a.cumulative_fit),
+            r.metric("theta_r"),
             r.outcome.reason()
         );
         assert_clean(&r, &format!("{w} × {h}"));
@@ -177,13 +180,14 @@ fn tilt_rates_fast_and_slow() {
     for rate in ["tilt.rate=1", "tilt.rate=100"] {
         let r = run_scene(SMALL, &["protocol=tilt", rate]);
         assert_clean(&r, rate);
-        if let Some(t) = r.tilt {
-            assert!(t.angle <= r.scene.tilt.max_angle + 100.0 * r.scene.equilibrium.check_interval);
+        let tilt: TiltSpec = r.scene.section().unwrap();
+        if let Some(t) = r.metric("theta_t") {
+            assert!(t <= tilt.max_angle + 1.0, "{t}");
         }
         println!(
             "{rate}: {} θ_T {:?}",
             r.outcome.status(),
-            r.tilt.map(|t| t.angle)
+            r.metric("theta_t")
         );
     }
 }
@@ -206,13 +210,15 @@ fn a_forced_step_above_the_stability_limit_is_refused_or_caught() {
     assert_eq!(r.outcome.status(), "failed", "{:?}", r.outcome);
 }
 
-/// Runs a closure on the simulation the engine builds for a scene.
-struct Probe<F>(F);
+/// Runs a closure on the closed, filled box the engine builds for a scene.
+struct Probe<'a, F>(&'a Scene, F);
 
-impl<T, F: FnOnce(&mut dyn ProbeSim) -> T> EngineJob for Probe<F> {
+impl<T, F: FnOnce(&mut dyn ProbeSim) -> T> EngineJob<2> for Probe<'_, F> {
     type Output = T;
-    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, _: &Scene, mut sim: Simulation<2, L, I>) -> T {
-        (self.0)(&mut sim)
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> T {
+        let spec = PileSpec::of(self.0).unwrap();
+        let mut sim = closed_box::<L, I>(self.0, &spec, laws);
+        (self.1)(&mut sim)
     }
 }
 
@@ -260,15 +266,17 @@ impl<L: ContactLaw<2>, I: Integrator<2>> ProbeSim for Simulation<2, L, I> {
 #[test]
 fn tens_of_thousands_of_grains() {
     // 40 × 20 cm at the default packing: 20 000 grains.
-    let big = scene(SMALL, &["box.width=40", "box.height=20"]);
-    assert_eq!(big.grain_count(), 20_000);
+    let big = scene(SMALL, &["box.width=40", "box.height=20"]).resolved();
+    let cell: BoxSpec = big.section().unwrap();
+    assert_eq!(cell.grain_count(&big), 20_000);
     let (n, pairs, finite) = with_engine(
         &big,
-        Probe(|sim: &mut dyn ProbeSim| {
+        Probe(&big, |sim: &mut dyn ProbeSim| {
             sim.step(300).expect("a falling column steps cleanly");
             (sim.len(), sim.pairs(), sim.all_finite())
         }),
-    );
+    )
+    .unwrap();
     assert_eq!(n, 20_000);
     assert!(finite);
     // The neighbour list stays linear in N: a handful of candidates per grain.
@@ -277,11 +285,12 @@ fn tens_of_thousands_of_grains() {
 
 #[test]
 fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
-    let s = scene(SMALL, &[]);
-    let extent = 2.0 * (s.container.width + s.container.fill_height());
+    let s = scene(SMALL, &[]).resolved();
+    let cell: BoxSpec = s.section().unwrap();
+    let extent = 2.0 * (cell.width + cell.fill_height());
     let outcome = with_engine(
         &s,
-        Probe(|sim: &mut dyn ProbeSim| {
+        Probe(&s, |sim: &mut dyn ProbeSim| {
             sim.arm_energy_guard(extent);
             sim.step(2000).expect("the fill starts cleanly");
             let before = sim.check_energy();
@@ -290,7 +299,8 @@ fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
             sim.scale_velocities(50.0);
             (before, sim.check_energy())
         }),
-    );
+    )
+    .unwrap();
     assert!(outcome.0.is_ok(), "{:?}", outcome.0);
     match outcome.1 {
         Err(Blowup::Energy { kinetic, limit, .. }) => assert!(kinetic > limit),

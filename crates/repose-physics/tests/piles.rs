@@ -25,9 +25,8 @@ fn repose_angles(overrides: &[&str], seeds: std::ops::Range<u64>) -> Vec<f64> {
             let mut o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
             o.push(format!("seed={seed}"));
             run_ok(&scene("fill_release", &o))
-                .repose
+                .metric("theta_r")
                 .expect("angles")
-                .cumulative_fit
         })
         .collect()
 }
@@ -93,8 +92,8 @@ fn same_scene_and_seed_give_bit_identical_results() {
         runs[1].final_state.as_ref().unwrap(),
     );
     for (ga, gb) in a.grains.iter().zip(&b.grains) {
-        assert_eq!(ga.position.x.to_bits(), gb.position.x.to_bits());
-        assert_eq!(ga.velocity.y.to_bits(), gb.velocity.y.to_bits());
+        assert_eq!(ga.position[0].to_bits(), gb.position[0].to_bits());
+        assert_eq!(ga.velocity[1].to_bits(), gb.velocity[1].to_bits());
     }
     // A different seed is a different pile.
     let other = run_ok(&scene(
@@ -105,7 +104,7 @@ fn same_scene_and_seed_give_bit_identical_results() {
             "box.height=3".into(),
         ],
     ));
-    assert_ne!(other.repose, runs[0].repose);
+    assert_ne!(other.metric("theta_r"), runs[0].metric("theta_r"));
 }
 
 #[test]
@@ -116,8 +115,8 @@ fn tilted_piles_hold_for_a_few_degrees_before_they_move() {
         .map(|seed| {
             let r = run_ok(&scene("tilt", &[format!("seed={seed}")]));
             (
-                r.tilt.expect("tilt").angle,
-                r.repose.unwrap().cumulative_fit,
+                r.metric("theta_t").expect("tilt"),
+                r.metric("theta_r").unwrap(),
             )
         })
         .collect();
@@ -135,22 +134,16 @@ fn tilted_piles_hold_for_a_few_degrees_before_they_move() {
 fn constant_flux_builds_a_pile_up_to_a_steady_angle() {
     let s = scene("flux", &["box.width=2".into(), "flux.insertions=80".into()]);
     let r = run_ok(&s);
-    let f = r.flux.expect("flux summary");
-    assert_eq!(f.series.len(), 80);
+    let series = &r.series[0].points;
+    assert_eq!(series.len(), 80);
     // Before the first insertion the floor holds one flat layer.
-    let first = f.series[0].angle;
-    let steady = f.steady.expect("steady statistics");
-    println!(
-        "flux: flat layer {first:.2}°, steady {:.2} ± {:.2}° (n {})",
-        steady.mean, steady.sd, steady.n
-    );
+    let first = series[0][1];
+    let mean = r.metric("theta_ms_mean").expect("steady statistics");
+    let sd = r.metric("theta_ms_sd").expect("steady statistics");
+    println!("flux: flat layer {first:.2}°, steady {mean:.2} ± {sd:.2}°");
     assert!(first.abs() < 3.0, "the pile starts flat: {first}°");
-    assert!(
-        steady.mean > first + 10.0,
-        "steady angle {} against {first}",
-        steady.mean
-    );
-    assert!(f.series.windows(2).all(|w| w[1].iteration > w[0].iteration));
+    assert!(mean > first + 10.0, "steady angle {mean} against {first}");
+    assert!(series.windows(2).all(|w| w[1][0] > w[0][0]));
     assert_eq!(r.grains.inserted, 80);
 }
 
@@ -175,7 +168,7 @@ fn failures_end_with_an_outcome_that_says_why() {
         }
         other => panic!("expected a failure, got {other:?}"),
     }
-    assert!(r.repose.is_none());
+    assert!(r.metric("theta_r").is_none());
     // A cap too short to settle: not settled, no angle.
     let r = run(
         &scene("fill_release", &["equilibrium.max_fill_time=0.05".into()]),
@@ -187,7 +180,7 @@ fn failures_end_with_an_outcome_that_says_why() {
         "{:?}",
         r.outcome
     );
-    assert!(r.repose.is_none());
+    assert!(r.metric("theta_r").is_none());
     // A tilt cap below any onset: no onset, θ_R kept, no θ_T.
     let r = run(&scene("tilt", &["tilt.max_angle=0.01".into()]), &mut Quiet).unwrap();
     assert!(
@@ -195,5 +188,5 @@ fn failures_end_with_an_outcome_that_says_why() {
         "{:?}",
         r.outcome
     );
-    assert!(r.tilt.is_none() && r.repose.is_some());
+    assert!(r.metric("theta_t").is_none() && r.metric("theta_r").is_some());
 }

@@ -1,126 +1,182 @@
-//! CSV exports of samples and points (one header line, comma-separated,
-//! empty cells for missing values, axis values in `axis:<key>` columns).
+//! CSV exports of samples and points: one header line, axis values in
+//! `axis:<key>` columns, one column per metric (or per statistic of a
+//! metric), empty cells for missing values.
 
-use crate::{Point, Sample, METRICS};
+use crate::{Point, Sample};
+use serde_json::{Map, Value};
 use std::collections::BTreeSet;
-use std::fmt::Write;
 
-fn cell(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
-fn quote(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-fn axes<'a>(
-    points: impl Iterator<Item = &'a serde_json::Map<String, serde_json::Value>>,
-) -> Vec<String> {
+/// The axes any of the points varies, sorted.
+fn axes<'a>(points: impl Iterator<Item = &'a Map<String, Value>>) -> Vec<String> {
     let set: BTreeSet<String> = points.flat_map(|p| p.keys().cloned()).collect();
     set.into_iter().collect()
 }
 
-fn axis_cells(point: &serde_json::Map<String, serde_json::Value>, keys: &[String]) -> String {
+fn axis_cells(point: &Map<String, Value>, keys: &[String]) -> Vec<String> {
     keys.iter()
         .map(|k| match point.get(k) {
-            Some(serde_json::Value::String(s)) => quote(s),
-            Some(v) => quote(&v.to_string()),
+            Some(Value::String(s)) => s.clone(),
+            Some(v) => v.to_string(),
             None => String::new(),
         })
-        .collect::<Vec<_>>()
-        .join(",")
+        .collect()
 }
 
-/// One row per sample.
-pub fn samples_csv(samples: &[Sample]) -> String {
+fn cell(v: Option<f64>) -> String {
+    v.map(|x| x.to_string()).unwrap_or_default()
+}
+
+/// `metrics` first, in their order, then any other metric a row carries.
+fn metric_columns<'a>(
+    declared: &[String],
+    present: impl Iterator<Item = &'a String>,
+) -> Vec<String> {
+    let mut out: Vec<String> = declared.to_vec();
+    let extra: BTreeSet<&String> = present.filter(|m| !declared.contains(m)).collect();
+    out.extend(extra.into_iter().cloned());
+    out
+}
+
+fn write(rows: Vec<Vec<String>>) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for row in rows {
+        // Writing to memory cannot fail.
+        let _ = w.write_record(&row);
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// One row per sample; `metrics` names the columns to lead with (the
+/// protocol's declared metrics).
+pub fn samples_csv(samples: &[Sample], metrics: &[String]) -> String {
     let keys = axes(samples.iter().map(|s| &s.point));
-    let mut out = String::new();
+    let metrics = metric_columns(metrics, samples.iter().flat_map(|s| s.metrics.keys()));
     let mut header: Vec<String> = keys.iter().map(|k| format!("axis:{k}")).collect();
+    header.extend(["sample", "seed", "outcome", "reason"].map(String::from));
+    header.extend(metrics.iter().cloned());
     header.extend(
         [
-            "sample",
-            "seed",
-            "outcome",
-            "reason",
-            "theta_r",
-            "theta_r_line",
-            "theta_r_endpoints",
-            "theta_t",
-            "theta_ms_mean",
-            "theta_ms_sd",
-            "theta_ms_max",
             "grains_initial",
             "grains_final",
             "grains_lost",
             "iterations",
             "simulated_time",
             "wall_time",
+            "particle_steps",
             "engine",
             "sample_hash",
         ]
         .map(String::from),
     );
-    let _ = writeln!(out, "{}", header.join(","));
+    let mut rows = vec![header];
     for s in samples {
-        let mut row = Vec::new();
-        if !keys.is_empty() {
-            row.push(axis_cells(&s.point, &keys));
-        }
+        let mut row = axis_cells(&s.point, &keys);
         row.extend([
             s.sample.to_string(),
             s.seed.to_string(),
             s.outcome.clone(),
-            quote(s.reason.as_deref().unwrap_or("")),
-            cell(s.theta_r),
-            cell(s.theta_r_line),
-            cell(s.theta_r_endpoints),
-            cell(s.theta_t),
-            cell(s.theta_ms_mean),
-            cell(s.theta_ms_sd),
-            cell(s.theta_ms_max),
+            s.reason.clone().unwrap_or_default(),
+        ]);
+        row.extend(metrics.iter().map(|m| cell(s.metrics.get(m).copied())));
+        row.extend([
             s.grains_initial.to_string(),
             s.grains_final.to_string(),
             s.grains_lost.to_string(),
             s.iterations.to_string(),
             s.simulated_time.to_string(),
             s.wall_time.to_string(),
-            quote(&s.engine),
+            s.particle_steps.to_string(),
+            s.engine.clone(),
             s.sample_hash.clone(),
         ]);
-        let _ = writeln!(out, "{}", row.join(","));
+        rows.push(row);
     }
-    out
+    write(rows)
 }
 
 /// One row per point: n, mean, sd and sem of every metric.
-pub fn points_csv(points: &[Point]) -> String {
+pub fn points_csv(points: &[Point], metrics: &[String]) -> String {
     let keys = axes(points.iter().map(|p| &p.point));
+    let metrics = metric_columns(metrics, points.iter().flat_map(|p| p.metrics.keys()));
     let mut header: Vec<String> = keys.iter().map(|k| format!("axis:{k}")).collect();
     header.push("samples".into());
     header.push("failures".into());
-    for (m, _) in METRICS {
+    for m in &metrics {
         for stat in ["n", "mean", "sd", "sem"] {
             header.push(format!("{m}_{stat}"));
         }
     }
-    let mut out = String::new();
-    let _ = writeln!(out, "{}", header.join(","));
+    let mut rows = vec![header];
     for p in points {
-        let mut row = Vec::new();
-        if !keys.is_empty() {
-            row.push(axis_cells(&p.point, &keys));
-        }
+        let mut row = axis_cells(&p.point, &keys);
         row.push(p.samples.to_string());
         row.push(p.failures.to_string());
-        for (m, _) in METRICS {
-            let a = p.metrics[*m];
+        for m in &metrics {
+            let a = p.metrics.get(m).copied().unwrap_or(crate::Aggregate::EMPTY);
             row.extend([a.n.to_string(), cell(a.mean), cell(a.sd), cell(a.sem)]);
         }
-        let _ = writeln!(out, "{}", row.join(","));
+        rows.push(row);
     }
-    out
+    write(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Aggregate;
+    use std::collections::BTreeMap;
+
+    #[test]
+    fn cells_with_commas_and_quotes_are_quoted_and_read_back() {
+        let sample = Sample {
+            job_id: "j".into(),
+            sample_hash: "h".into(),
+            point: serde_json::json!({"contact.mu": 0.2})
+                .as_object()
+                .cloned()
+                .unwrap_or_default(),
+            sample: 0,
+            seed: 1,
+            outcome: "failed".into(),
+            reason: Some("flow: grain 3 \"ran\", far".into()),
+            metrics: BTreeMap::from([("theta_x".to_string(), 1.5)]),
+            grains_initial: 1,
+            grains_final: 1,
+            grains_lost: 0,
+            iterations: 10,
+            simulated_time: 0.1,
+            wall_time: 0.01,
+            particle_steps: 10,
+            engine: "e".into(),
+        };
+        let text = samples_csv(&[sample], &["theta_r".to_string()]);
+        let mut r = csv::Reader::from_reader(text.as_bytes());
+        let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+        let row = r.records().next().unwrap().unwrap();
+        let get = |k: &str| row[header.iter().position(|h| h == k).unwrap()].to_string();
+        assert_eq!(get("reason"), "flow: grain 3 \"ran\", far");
+        assert_eq!(get("theta_r"), "");
+        assert_eq!(get("theta_x"), "1.5");
+        assert_eq!(get("axis:contact.mu"), "0.2");
+    }
+
+    #[test]
+    fn points_have_four_statistics_per_metric() {
+        let p = Point {
+            point: Map::new(),
+            samples: 3,
+            failures: 1,
+            metrics: BTreeMap::from([(
+                "theta_r".to_string(),
+                Aggregate::from_sums(2, Some(4.0), Some(10.0)),
+            )]),
+        };
+        let text = points_csv(&[p], &["theta_r".to_string()]);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[0],
+            "samples,failures,theta_r_n,theta_r_mean,theta_r_sd,theta_r_sem"
+        );
+        assert!(lines[1].starts_with("3,1,2,2,1.414"), "{}", lines[1]);
+    }
 }

@@ -13,8 +13,8 @@
 //! result: its outcome and reason are stored like any other. Only a scene
 //! that cannot even be read marks the job failed.
 
-use repose_physics::{Observer, Progress, Scene};
-use repose_store::{Lease, Store};
+use repose_physics::{Observer, Progress, RunReport, Scene};
+use repose_store::{Lease, ResultRecord, Store};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -102,7 +102,7 @@ pub async fn run_worker(
 
         let scene: Scene = match serde_json::from_str::<serde_json::Value>(&job.scene)
             .map_err(|e| e.to_string())
-            .and_then(|v| Scene::from_json(v).map_err(|e| e.to_string()))
+            .and_then(|v| Scene::from_stored(v).map_err(|e| e.to_string()))
         {
             Ok(s) => s,
             Err(reason) => {
@@ -187,8 +187,22 @@ pub async fn run_worker(
             tracing::info!(job = %job.job_id, "handed back");
             continue;
         }
+        let record = match record(&report) {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = store
+                    .fail(
+                        &job.job_id,
+                        &config.owner,
+                        &format!("unwritable report: {e}"),
+                    )
+                    .await;
+                tally.failed += 1;
+                continue;
+            }
+        };
         match store
-            .complete(&job.job_id, &config.owner, &job.sample_hash, &report)
+            .complete(&job.job_id, &config.owner, &job.sample_hash, &record)
             .await
         {
             Ok(true) => tally.completed += 1,
@@ -202,6 +216,27 @@ pub async fn run_worker(
             }
         }
     }
+}
+
+/// What the store keeps of a report: its outcome, metrics and cost, and
+/// the report itself as a document.
+pub fn record(report: &RunReport) -> Result<ResultRecord, serde_json::Error> {
+    let count = |n: usize| i64::try_from(n).unwrap_or(i64::MAX);
+    Ok(ResultRecord {
+        engine: report.engine.clone(),
+        seed: report.seed,
+        outcome: report.outcome.status().to_string(),
+        reason: report.outcome.reason(),
+        metrics: report.metrics.clone(),
+        grains_initial: count(report.grains.initial),
+        grains_final: count(report.grains.remaining),
+        grains_lost: count(report.grains.lost),
+        iterations: i64::try_from(report.iterations).unwrap_or(i64::MAX),
+        simulated_time: report.simulated_time,
+        wall_time: report.wall_time,
+        particle_steps: i64::try_from(report.particle_steps).unwrap_or(i64::MAX),
+        report: serde_json::to_string(report)?,
+    })
 }
 
 /// A shutdown channel that turns true on SIGTERM or Ctrl-C.

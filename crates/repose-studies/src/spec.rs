@@ -7,9 +7,10 @@
 //! physics crate's own checks, so a sweep is refused exactly when one of
 //! its scenes would be.
 
-use repose_physics::preset::{set_path, Preset};
-use repose_physics::scene::{FieldError, Protocol, Scene, SceneError};
-use repose_physics::ENGINE;
+use repose_physics::doc;
+use repose_physics::preset::Preset;
+use repose_physics::scene::{FieldError, Scene, SceneError};
+use repose_physics::{protocols, ENGINE};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use sha2::{Digest, Sha256};
@@ -21,24 +22,28 @@ pub const MAX_JOBS: usize = 100_000;
 /// The fidelity preset of a sweep (the physics crate's [`Preset`]).
 pub type Fidelity = Preset;
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSpec {
     /// A name to show; defaults to the protocol and the axes.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    pub protocol: Protocol,
+    /// A registered protocol.
+    pub protocol: String,
     /// Scene values shared by every job (any key of the scene document
     /// except `protocol` and `seed`).
     #[serde(default)]
+    #[schema(value_type = Object)]
     pub base: Map<String, Value>,
     /// Values to sweep, by dotted scene key.
     #[serde(default)]
+    #[schema(value_type = HashMap<String, Vec<Object>>)]
     pub axes: BTreeMap<String, Vec<Value>>,
     /// Samples (seeds) per point.
     #[serde(default = "one")]
     pub samples: u32,
     #[serde(default)]
+    #[schema(value_type = String, example = "standard")]
     pub fidelity: Fidelity,
     /// Sample `k` of every point runs with seed `seed_base + k`.
     #[serde(default)]
@@ -46,6 +51,10 @@ pub struct SweepSpec {
     /// Higher runs first.
     #[serde(default)]
     pub priority: i64,
+    /// The study sweep this one queues (`paper/sweep`, e.g. `lh93/fig347`),
+    /// if it was queued from a paper's figures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<String>,
 }
 
 fn one() -> u32 {
@@ -80,9 +89,9 @@ impl SweepSpec {
         self.name.clone().unwrap_or_else(|| {
             let axes: Vec<&str> = self.axes.keys().map(|k| k.as_str()).collect();
             if axes.is_empty() {
-                self.protocol.name().to_string()
+                self.protocol.clone()
             } else {
-                format!("{} over {}", self.protocol.name(), axes.join(" × "))
+                format!("{} over {}", self.protocol, axes.join(" × "))
             }
         })
     }
@@ -96,6 +105,16 @@ impl SweepSpec {
 
     /// Validates the spec and builds every job, in (point, sample) order.
     pub fn expand(&self) -> Result<Vec<JobSpec>, SceneError> {
+        if protocols::find(&self.protocol).is_none() {
+            return Err(field_error(
+                "protocol",
+                format!(
+                    "unknown protocol `{}`: expected one of {}",
+                    self.protocol,
+                    protocols::names().join(", ")
+                ),
+            ));
+        }
         if self.samples == 0 {
             return Err(field_error("samples", "must be at least 1"));
         }
@@ -137,10 +156,7 @@ impl SweepSpec {
         }
 
         let mut base = self.base.clone();
-        base.insert(
-            "protocol".into(),
-            serde_json::to_value(self.protocol).expect("protocol serialises"),
-        );
+        base.insert("protocol".into(), Value::from(self.protocol.clone()));
         base.insert("preset".into(), Value::from(self.fidelity.name()));
 
         let keys: Vec<&String> = self.axes.keys().collect();
@@ -151,8 +167,8 @@ impl SweepSpec {
             let mut doc = base.clone();
             for (k, key) in keys.iter().enumerate() {
                 let value = self.axes[*key][index[k]].clone();
-                set_path(&mut doc, key, value.clone())
-                    .map_err(|m| field_error(format!("axes.{key}"), m))?;
+                doc::set(&mut doc, key, value.clone())
+                    .map_err(|e| field_error(format!("axes.{key}"), e.message))?;
                 point.insert((*key).clone(), value);
             }
             for sample in 0..self.samples {
@@ -188,6 +204,32 @@ impl SweepSpec {
     }
 }
 
+impl SweepSpec {
+    /// The sweep as the store keeps it.
+    pub fn new_sweep(&self) -> repose_store::NewSweep {
+        repose_store::NewSweep {
+            name: self.display_name(),
+            protocol: self.protocol.clone(),
+            spec: serde_json::to_value(self).unwrap_or(Value::Null),
+            priority: self.priority,
+            study: self.study.clone(),
+        }
+    }
+}
+
+impl JobSpec {
+    /// The job as the store keeps it.
+    pub fn to_new_job(&self) -> repose_store::NewJob {
+        repose_store::NewJob {
+            point: self.point.clone(),
+            sample: self.sample,
+            seed: self.seed,
+            sample_hash: self.sample_hash.clone(),
+            scene: serde_json::to_value(&self.scene).unwrap_or(Value::Null),
+        }
+    }
+}
+
 /// Points a scene error at the sweep's own fields: a key set by an axis is
 /// reported as `axes.<key>`, anything else as `base.<key>`.
 fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
@@ -210,7 +252,7 @@ fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
 /// SHA-256 of the canonical JSON of a resolved scene (keys sorted) and the
 /// engine version: the identity of a sample.
 pub fn sample_hash(scene: &Scene) -> String {
-    let canonical = serde_json::to_value(scene).expect("scenes serialise");
+    let canonical = serde_json::to_value(scene).unwrap_or(Value::Null);
     let mut h = Sha256::new();
     h.update(ENGINE.as_bytes());
     h.update([0u8]);
@@ -246,11 +288,11 @@ mod tests {
         );
         assert_eq!(jobs[0].seed, 100);
         assert_eq!(jobs[3].seed, 103);
-        assert_eq!(jobs[4].scene.contact.mu, 0.2);
-        assert_eq!(jobs[23].scene.container.width, 3.0);
-        assert_eq!(jobs[23].scene.container.height, 2.0);
         // standard preset: Verlet; the resolved scene carries its time step
         assert_eq!(jobs[0].scene.numerics.integrator.name(), "verlet");
+        assert_eq!(jobs[4].scene.sections["contact"]["mu"], 0.2);
+        assert_eq!(jobs[23].scene.sections["box"]["width"], 3.0);
+        assert_eq!(jobs[23].scene.sections["box"]["height"], 2.0);
         assert!(jobs[0].scene.numerics.dt.is_some());
         let hashes: std::collections::HashSet<_> = jobs.iter().map(|j| &j.sample_hash).collect();
         assert_eq!(hashes.len(), 24);
@@ -293,6 +335,11 @@ mod tests {
                 json!({"protocol": "tilt", "base": {"seed": 3}}),
                 "base.seed",
             ),
+            (
+                json!({"protocol": "flux", "base": {"numerics": 1}}),
+                "base.numerics",
+            ),
+            (json!({"protocol": "sideways"}), "protocol"),
         ];
         for (v, field) in cases {
             let err = spec(v.clone()).expand().unwrap_err();

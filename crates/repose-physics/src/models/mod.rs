@@ -1,0 +1,148 @@
+//! Contact models: the material of a scene and the compiled engines it runs on.
+//!
+//! A model owns the sections of a scene that describe grains and contacts
+//! (Lee & Herrmann's `[grains]`, `[contact]` and `[wall_contact]`), their
+//! defaults, the time scale of a contact, and the choice of compiled engine:
+//! which integrator and which contact-law components a scene's options ask
+//! for. That choice is one flat list per model ([`select!`]): each option is
+//! one line naming the types it can be, and every combination is compiled,
+//! so a scene pays only for the physics it switches on.
+//!
+//! Adding a model is its own module plus one line in [`MODELS`] (and one in
+//! the [`Models`] impl of each dimension it has).
+
+pub mod lee_herrmann;
+
+use crate::contact::ContactLaw;
+use crate::dim::{Dim, Space};
+use crate::doc::Doc;
+use crate::integrate::Integrator;
+use crate::scene::{Checks, Scene, SceneError, SectionDecl};
+use std::collections::BTreeMap;
+
+/// A contact model as the scene and the registry see it.
+pub trait Model: Sync {
+    /// The name scenes use (`model = "…"`).
+    fn name(&self) -> &'static str;
+    /// One line on what it models.
+    fn about(&self) -> &'static str;
+    /// The dimensions it has a form for.
+    fn dimensions(&self) -> &'static [usize];
+    /// The sections it owns.
+    fn sections(&self) -> Vec<SectionDecl>;
+    /// Core values it sets where a document is silent (gravity, numerics).
+    fn defaults(&self, dimension: usize) -> Doc;
+    /// Checks across its sections and the core.
+    fn check(&self, scene: &Scene, c: &mut Checks);
+    /// Writes out the values derived from others.
+    fn resolve(&self, scene: &mut Scene);
+    /// Duration of the stiffest contact at the reference speed.
+    fn contact_time(&self, scene: &Scene) -> f64;
+    /// Density of the grains (their mass is that of a sphere).
+    fn density(&self, scene: &Scene) -> f64;
+    /// The physics options a run used, by name, for its report.
+    fn options(&self, scene: &Scene) -> BTreeMap<String, String>;
+}
+
+/// Every contact model, by name. Registering a model is one line here.
+pub static MODELS: &[&dyn Model] = &[&lee_herrmann::LeeHerrmann];
+
+/// The model of this name.
+pub fn find(name: &str) -> Option<&'static dyn Model> {
+    MODELS.iter().copied().find(|m| m.name() == name)
+}
+
+/// The registered names.
+pub fn names() -> Vec<&'static str> {
+    MODELS.iter().map(|m| m.name()).collect()
+}
+
+/// The contact laws of a run: one between grains, one between a grain and a wall.
+#[derive(Debug, Clone, Copy)]
+pub struct Laws<L> {
+    pub pair: L,
+    pub wall: L,
+}
+
+/// Something to do with the compiled engine a scene asks for, whatever its types.
+pub trait EngineJob<const D: usize>
+where
+    Dim<D>: Space<D>,
+{
+    type Output;
+    fn run<L: ContactLaw<D>, I: Integrator<D>>(self, laws: Laws<L>) -> Self::Output;
+}
+
+/// The models that have a form in dimension `D`.
+pub trait Models<const D: usize>
+where
+    Dim<D>: Space<D>,
+{
+    /// Runs `job` on the engine the scene's model and options select.
+    fn with_engine<J: EngineJob<D>>(scene: &Scene, job: J) -> Result<J::Output, SceneError>;
+}
+
+impl Models<2> for Dim<2> {
+    fn with_engine<J: EngineJob<2>>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
+        match scene.model.as_str() {
+            lee_herrmann::NAME => lee_herrmann::with_engine(scene, job),
+            other => Err(no_form(other, 2)),
+        }
+    }
+}
+
+impl Models<3> for Dim<3> {
+    fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
+        match scene.model.as_str() {
+            lee_herrmann::NAME => lee_herrmann::with_engine(scene, job),
+            other => Err(no_form(other, 3)),
+        }
+    }
+}
+
+fn no_form(model: &str, dimension: usize) -> SceneError {
+    SceneError::single("model", format!("model {model} has no {dimension}D form"))
+}
+
+/// Runs `job` on the engine a (resolved) scene asks for.
+pub fn with_engine<const D: usize, J: EngineJob<D>>(
+    scene: &Scene,
+    job: J,
+) -> Result<J::Output, SceneError>
+where
+    Dim<D>: Space<D> + Models<D>,
+{
+    <Dim<D> as Models<D>>::with_engine(scene, job)
+}
+
+/// Chooses one type per option from run-time values and evaluates the body
+/// with those types in scope: every combination is compiled, and the list
+/// of options stays flat however many there are.
+///
+/// ```ignore
+/// select! {
+///     I = scheme => { Scheme::Gear5 => Gear5, Scheme::Verlet => VelocityVerlet };
+///     N = floor => { true => HertzDamped<true>, false => HertzDamped<false> };
+///     => job.run::<Pairwise<N, Frictionless>, I>(laws)
+/// }
+/// ```
+macro_rules! select {
+    (=> $body:expr) => {
+        $body
+    };
+    (@each $name:ident, $e:expr, { $($pat:pat => $ty:ty),+ $(,)? }, $rest:tt) => {
+        match $e {
+            $($pat => {
+                type $name = $ty;
+                $crate::models::select!(@unwrap $rest)
+            })+
+        }
+    };
+    (@unwrap [$($rest:tt)*]) => {
+        $crate::models::select!($($rest)*)
+    };
+    ($name:ident = $e:expr => $arms:tt; $($rest:tt)*) => {
+        $crate::models::select!(@each $name, $e, $arms, [$($rest)*])
+    };
+}
+pub(crate) use select;

@@ -1,0 +1,115 @@
+//! Fill and release (Lee & Herrmann, section 3): grains settle in a closed
+//! box, the right wall is removed, and the pile that stays has the angle of
+//! repose θ_R, measured by the paper's three methods.
+
+use super::pile::{self, BoxSpec, Equilibrium, Pile, PileSpec};
+use super::runner::Findings;
+use super::{Metric, Observer, Protocol};
+use crate::contact::ContactLaw;
+use crate::integrate::Integrator;
+use crate::models::{self, lee_herrmann, EngineJob, Laws};
+use crate::preset::Preset;
+use crate::report::{Outcome, RunReport};
+use crate::scene::{Checks, Scene, SceneError, SectionDecl};
+use serde_json::Value;
+
+pub struct FillRelease;
+
+/// θ_R by the paper's three slope methods, method 3 (its headline) first.
+pub const REPOSE_METRICS: [Metric; 3] = [
+    Metric {
+        name: "theta_r",
+        label: "θ_R",
+        unit: "°",
+        description: "angle of repose by method 3: the curvature of a parabola fitted to the running sum of the surface height",
+        phase: "flow",
+    },
+    Metric {
+        name: "theta_r_line",
+        label: "θ_R (method 2)",
+        unit: "°",
+        description: "angle of repose by method 2: a least-squares line through the surface height",
+        phase: "flow",
+    },
+    Metric {
+        name: "theta_r_endpoints",
+        label: "θ_R (method 1)",
+        unit: "°",
+        description: "angle of repose by method 1: the line through the first and last columns of the surface",
+        phase: "flow",
+    },
+];
+
+impl Protocol for FillRelease {
+    fn name(&self) -> &'static str {
+        "fill_release"
+    }
+
+    fn about(&self) -> &'static str {
+        "fill a box, remove its right wall, measure the angle of repose θ_R"
+    }
+
+    fn dimensions(&self) -> &'static [usize] {
+        &[2]
+    }
+
+    fn models(&self) -> &'static [&'static str] {
+        &[lee_herrmann::NAME]
+    }
+
+    fn sections(&self) -> Vec<SectionDecl> {
+        vec![
+            SectionDecl::of::<BoxSpec>(),
+            SectionDecl::of::<Equilibrium>(),
+        ]
+    }
+
+    fn metrics(&self) -> &'static [Metric] {
+        &REPOSE_METRICS
+    }
+
+    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
+        pile::preset(preset)
+    }
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        pile::check(scene, true, c);
+    }
+
+    fn resolve(&self, scene: &mut Scene) {
+        pile::resolve(scene);
+    }
+
+    fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
+        let spec = PileSpec::of(scene)?;
+        models::with_engine::<2, _>(
+            scene,
+            Job {
+                scene,
+                spec,
+                observer,
+            },
+        )
+    }
+}
+
+struct Job<'a> {
+    scene: &'a Scene,
+    spec: PileSpec,
+    observer: &'a mut dyn Observer,
+}
+
+impl EngineJob<2> for Job<'_> {
+    type Output = RunReport;
+
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> RunReport {
+        let sim = pile::closed_box::<L, I>(self.scene, &self.spec, laws);
+        let mut pile = Pile::new(sim, self.scene, self.spec, self.observer);
+        let mut findings = Findings::default();
+        let outcome = match pile.released_pile(&mut findings) {
+            Ok(_) => Outcome::Completed,
+            Err(outcome) => outcome,
+        };
+        pile.run.report(outcome, findings)
+    }
+}

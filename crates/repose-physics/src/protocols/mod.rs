@@ -1,0 +1,129 @@
+//! Protocols: the experiments a scene can run, as plug-ins.
+//!
+//! A protocol is one type implementing [`Protocol`] in its own module. It
+//! declares what the rest of the project needs to know about it — its
+//! dimensions and models, its scene sections with their defaults and checks,
+//! the settings of each fidelity preset, and its metrics (name, unit, label,
+//! description and the phase that produces them) — and it runs a scene into
+//! a [`RunReport`]. The store, the API, the exports and the results page
+//! learn protocols and metrics from [`PROTOCOLS`]; registering a protocol is
+//! its module plus one line there.
+
+pub mod fill_release;
+pub mod flux;
+pub mod free_run;
+pub mod pile;
+pub mod runner;
+pub mod tilt;
+
+pub use runner::{Observer, Progress, Quiet};
+
+use crate::preset::Preset;
+use crate::report::RunReport;
+use crate::scene::{Checks, Scene, SceneError, SectionDecl};
+use serde::Serialize;
+use serde_json::Value;
+
+/// One number a protocol measures per sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Metric {
+    /// Key in reports, the store and the API, e.g. `theta_r`.
+    pub name: &'static str,
+    /// Short label for axes and tables, e.g. `θ_R`.
+    pub label: &'static str,
+    /// Unit, e.g. `°`.
+    pub unit: &'static str,
+    /// What it is, in a sentence.
+    pub description: &'static str,
+    /// The phase of the run that produces it.
+    pub phase: &'static str,
+}
+
+/// An experiment on a scene.
+pub trait Protocol: Sync {
+    /// The name scenes use (`protocol = "…"`).
+    fn name(&self) -> &'static str;
+    /// One line on what it measures.
+    fn about(&self) -> &'static str;
+    /// Dimensions it runs in; the first is the default.
+    fn dimensions(&self) -> &'static [usize];
+    /// Contact models it runs with.
+    fn models(&self) -> &'static [&'static str];
+    /// The model a scene of this dimension gets when it names none.
+    fn default_model(&self, _dimension: usize) -> &'static str {
+        self.models()[0]
+    }
+    /// The scene sections it owns.
+    fn sections(&self) -> Vec<SectionDecl>;
+    /// The metrics it reports, the headline first.
+    fn metrics(&self) -> &'static [Metric];
+    /// The scene values a fidelity preset sets, as dotted keys.
+    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)>;
+    /// Whether it draws grains from the model's distribution (rather than
+    /// only running the listed ones).
+    fn draws_grains(&self) -> bool {
+        true
+    }
+    /// Checks across its sections, the model's and the core.
+    fn check(&self, scene: &Scene, c: &mut Checks);
+    /// Writes out the values derived from others.
+    fn resolve(&self, _scene: &mut Scene) {}
+    /// Runs a validated, resolved scene.
+    fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError>;
+}
+
+/// Every protocol, by name. Registering a protocol is one line here.
+pub static PROTOCOLS: &[&dyn Protocol] = &[
+    &fill_release::FillRelease,
+    &tilt::Tilt,
+    &flux::Flux,
+    &free_run::FreeRun,
+];
+
+/// All registered protocols.
+pub fn all() -> &'static [&'static dyn Protocol] {
+    PROTOCOLS
+}
+
+/// The protocol of this name.
+pub fn find(name: &str) -> Option<&'static dyn Protocol> {
+    PROTOCOLS.iter().copied().find(|p| p.name() == name)
+}
+
+/// The registered names.
+pub fn names() -> Vec<&'static str> {
+    PROTOCOLS.iter().map(|p| p.name()).collect()
+}
+
+/// The metric of this name in any protocol.
+pub fn metric(name: &str) -> Option<&'static Metric> {
+    PROTOCOLS
+        .iter()
+        .flat_map(|p| p.metrics())
+        .find(|m| m.name == name)
+}
+
+/// Runs one sample of the scene.
+pub fn run(scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
+    scene.validate()?;
+    let scene = scene.resolved();
+    scene.protocol()?.run(&scene, observer)
+}
+
+/// The settings of the numerical presets shared by every protocol.
+pub fn numeric_preset(preset: Preset) -> Vec<(&'static str, Value)> {
+    match preset {
+        Preset::Quick => vec![
+            ("numerics.integrator", Value::from("verlet")),
+            ("numerics.dt_factor", Value::from(0.05)),
+        ],
+        Preset::Standard => vec![
+            ("numerics.integrator", Value::from("verlet")),
+            ("numerics.dt_factor", Value::from(0.02)),
+        ],
+        Preset::Paper => vec![
+            ("numerics.integrator", Value::from("gear5")),
+            ("numerics.dt_factor", Value::from(0.02)),
+        ],
+    }
+}

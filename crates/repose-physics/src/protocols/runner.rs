@@ -1,0 +1,262 @@
+//! What every protocol does around the engine: step in chunks, sample the
+//! kinetic energy and let the observer stop the run, turn early stops into
+//! outcomes, and assemble the report.
+
+use crate::contact::ContactLaw;
+use crate::dim::{Dim, Space, Vector};
+use crate::engine::{Blowup, Simulation};
+use crate::integrate::Integrator;
+use crate::report::{
+    ContactForce, Curve, FinalState, GrainCounts, Options, Outcome, Phase, Profile, Quantity,
+    RunReport, TracePoint, ENGINE,
+};
+use crate::scene::Scene;
+use crate::walls::WallSpec;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// What a run reports while it goes, and how it can be stopped.
+pub trait Observer {
+    /// Called at every check; return `false` to stop the run.
+    fn progress(&mut self, update: &Progress) -> bool;
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    pub phase: Phase,
+    pub time: f64,
+    pub iteration: u64,
+    pub grains: usize,
+    pub kinetic_energy: f64,
+    pub max_speed: f64,
+}
+
+/// An observer that never stops anything.
+pub struct Quiet;
+
+impl Observer for Quiet {
+    fn progress(&mut self, _update: &Progress) -> bool {
+        true
+    }
+}
+
+/// Why a phase ended early.
+pub enum Stop {
+    Blowup(Blowup),
+    Cancelled,
+    /// The phase's time cap passed.
+    TimedOut,
+}
+
+impl From<Blowup> for Stop {
+    fn from(b: Blowup) -> Self {
+        Stop::Blowup(b)
+    }
+}
+
+impl Stop {
+    /// The outcome of a run stopped in `phase`; a time-out becomes
+    /// "not settled" with the given reason.
+    pub fn outcome(self, phase: Phase, timed_out: impl FnOnce() -> String) -> Outcome {
+        let phase_name = phase.name().to_string();
+        match self {
+            Stop::Blowup(b) => Outcome::Failed {
+                phase: phase_name,
+                reason: b.to_string(),
+            },
+            Stop::Cancelled => Outcome::Cancelled { phase: phase_name },
+            Stop::TimedOut => Outcome::NotSettled {
+                phase: phase_name,
+                reason: timed_out(),
+            },
+        }
+    }
+}
+
+/// A running protocol: the engine, the scene and the bookkeeping around them.
+pub struct Runner<'a, const D: usize, L: ContactLaw<D>, I: Integrator<D>>
+where
+    Dim<D>: Space<D>,
+{
+    pub sim: Simulation<D, L, I>,
+    pub scene: &'a Scene,
+    observer: &'a mut dyn Observer,
+    trace: Vec<TracePoint>,
+    /// Steps between two checks.
+    pub check_steps: u64,
+    clock: Instant,
+    initial: usize,
+}
+
+impl<'a, const D: usize, L: ContactLaw<D>, I: Integrator<D>> Runner<'a, D, L, I>
+where
+    Dim<D>: Space<D>,
+{
+    /// Takes over a built engine; checks come every `check_interval`
+    /// seconds, and the energy guard allows what gravity can give a grain
+    /// moving within a region of size `extent`.
+    pub fn new(
+        mut sim: Simulation<D, L, I>,
+        scene: &'a Scene,
+        observer: &'a mut dyn Observer,
+        check_interval: f64,
+        extent: f64,
+    ) -> Self {
+        let check_steps = ((check_interval / sim.dt).round() as u64).max(1);
+        sim.set_energy_budget(extent);
+        let initial = sim.particles.len();
+        Runner {
+            sim,
+            scene,
+            observer,
+            trace: Vec::new(),
+            check_steps,
+            clock: Instant::now(),
+            initial,
+        }
+    }
+
+    /// Checks the energy guard, records a trace point and asks the observer
+    /// whether to go on.
+    pub fn sample(&mut self, phase: Phase) -> Result<TracePoint, Stop> {
+        self.sim.check_energy()?;
+        let p = &self.sim.particles;
+        let n = p.len().max(1) as f64;
+        let point = TracePoint {
+            iteration: self.sim.iteration,
+            time: self.sim.time,
+            kinetic_energy: p.kinetic_energy() / n,
+            max_speed: p.max_speed(),
+            phase,
+        };
+        self.trace.push(point);
+        let update = Progress {
+            phase,
+            time: point.time,
+            iteration: point.iteration,
+            grains: p.len(),
+            kinetic_energy: point.kinetic_energy,
+            max_speed: point.max_speed,
+        };
+        if self.observer.progress(&update) {
+            Ok(point)
+        } else {
+            Err(Stop::Cancelled)
+        }
+    }
+
+    /// Runs `steps` steps, sampling at every check.
+    pub fn advance(&mut self, phase: Phase, steps: u64) -> Result<(), Stop> {
+        let mut done = 0;
+        while done < steps {
+            self.sample(phase)?;
+            let chunk = self.check_steps.min(steps - done);
+            self.sim.run(chunk)?;
+            done += chunk;
+        }
+        Ok(())
+    }
+
+    /// The report of the run so far, with the protocol's findings.
+    pub fn report(&self, outcome: Outcome, findings: Findings) -> RunReport {
+        let wall_time = self.clock.elapsed().as_secs_f64();
+        let sim = &self.sim;
+        let p = &sim.particles;
+        let scene = self.scene;
+        let final_state = FinalState {
+            grains: p.grains(),
+            contacts: sim
+                .contact_forces()
+                .into_iter()
+                .map(|(i, j, force)| ContactForce {
+                    a: p.id[i],
+                    b: p.id[j],
+                    force,
+                })
+                .collect(),
+            walls: sim.walls.iter().map(WallSpec::from).collect(),
+        };
+        let physics = scene.model().map(|m| m.options(scene)).unwrap_or_default();
+        RunReport {
+            engine: ENGINE.to_string(),
+            protocol: scene.protocol.clone(),
+            model: scene.model.clone(),
+            dimension: D,
+            seed: scene.seed,
+            rng: scene.rng,
+            outcome,
+            metrics: findings.metrics,
+            theory: findings.theory,
+            series: findings.series,
+            profiles: findings.profiles,
+            details: findings.details,
+            grains: GrainCounts {
+                initial: self.initial,
+                inserted: findings.inserted,
+                lost: sim.removed,
+                remaining: p.len(),
+            },
+            iterations: sim.iteration,
+            simulated_time: sim.time,
+            wall_time,
+            particle_steps: sim.counters.particle_steps,
+            particle_steps_per_second: sim.counters.particle_steps as f64 / wall_time.max(1e-12),
+            options: Options {
+                preset: scene.preset.map(|p| p.name().to_string()),
+                integrator: scene.numerics.integrator.name().to_string(),
+                dt: sim.dt,
+                physics,
+            },
+            counters: sim.counters,
+            energy_trace: downsample(&self.trace, 4000),
+            max_overlap: sim.max_overlap_seen,
+            scene: scene.clone(),
+            final_state: Some(final_state),
+        }
+    }
+}
+
+/// What a protocol found, for its report.
+#[derive(Debug, Clone, Default)]
+pub struct Findings {
+    pub metrics: BTreeMap<String, f64>,
+    pub theory: Vec<Quantity>,
+    pub series: Vec<Curve>,
+    pub profiles: Vec<Profile>,
+    pub details: Value,
+    /// Grains added during the run.
+    pub inserted: usize,
+}
+
+impl Findings {
+    /// Records a measured metric.
+    pub fn metric(&mut self, name: &str, value: f64) {
+        self.metrics.insert(name.to_string(), value);
+    }
+}
+
+/// The size of the region a set of grains and a box `[0, size]` span.
+pub fn extent<const D: usize>(pos: &[Vector<D>], radius: &[f64], size: Vector<D>) -> f64 {
+    let (mut lo, mut hi) = (Vector::<D>::zeros(), size);
+    for (x, r) in pos.iter().zip(radius) {
+        lo = lo.inf(&x.add_scalar(-r));
+        hi = hi.sup(&x.add_scalar(*r));
+    }
+    (hi - lo).norm()
+}
+
+/// Keeps at most `max` points, evenly strided, always with the last one.
+fn downsample(trace: &[TracePoint], max: usize) -> Vec<TracePoint> {
+    if trace.len() <= max {
+        return trace.to_vec();
+    }
+    let stride = trace.len().div_ceil(max);
+    let mut out: Vec<TracePoint> = trace.iter().step_by(stride).copied().collect();
+    if let Some(last) = trace.last() {
+        if out.last() != Some(last) {
+            out.push(*last);
+        }
+    }
+    out
+}

@@ -1,0 +1,294 @@
+//! Reading a study back: sweeps with their progress, samples with their
+//! metrics, and per-point statistics computed in the database from counts,
+//! sums and sums of squares of the metric rows.
+
+use crate::{parse_point, Aggregate, Cost, Point, Progress, Result, Sample, Store, SweepInfo};
+use serde::{Deserialize, Serialize};
+use sqlx::Row;
+use std::collections::{BTreeMap, HashMap};
+
+impl Store {
+    /// Job counts by state for one sweep.
+    pub async fn progress(&self, sweep_id: &str) -> Result<Progress> {
+        let rows = sqlx::query(
+            &self.sql("SELECT state, COUNT(*) AS n FROM jobs WHERE sweep_id = $1 GROUP BY state"),
+        )
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        let mut p = Progress::default();
+        for r in rows {
+            let n: i64 = r.get("n");
+            match r.get::<String, _>("state").as_str() {
+                "queued" => p.queued = n,
+                "running" => p.running = n,
+                "done" => p.done = n,
+                "failed" => p.failed = n,
+                "cancelled" => p.cancelled = n,
+                _ => {}
+            }
+        }
+        Ok(p)
+    }
+
+    /// Number of sweeps (also a cheap check that the database answers).
+    pub async fn sweeps_count(&self) -> Result<i64> {
+        Ok(sqlx::query_scalar("SELECT COUNT(*) FROM sweeps")
+            .fetch_one(&self.pool)
+            .await?)
+    }
+
+    /// Number of stored results with this hash (0 or 1 by construction).
+    pub async fn result_count(&self, sample_hash: &str) -> Result<i64> {
+        let r = sqlx::query(&self.sql("SELECT COUNT(*) AS n FROM results WHERE sample_hash = $1"))
+            .bind(sample_hash)
+            .fetch_one(&self.pool)
+            .await?;
+        Ok(r.get("n"))
+    }
+
+    /// All sweeps, newest first, with progress.
+    pub async fn sweeps(&self) -> Result<Vec<SweepInfo>> {
+        let ids: Vec<String> =
+            sqlx::query_scalar(&self.sql("SELECT id FROM sweeps ORDER BY created_at DESC, id"))
+                .fetch_all(&self.pool)
+                .await?;
+        let mut out = Vec::with_capacity(ids.len());
+        for id in ids {
+            if let Some(s) = self.sweep(&id).await? {
+                out.push(s);
+            }
+        }
+        Ok(out)
+    }
+
+    /// One sweep with its progress and ETA, or None.
+    pub async fn sweep(&self, id: &str) -> Result<Option<SweepInfo>> {
+        let Some(row) = sqlx::query(&self.sql(
+            "SELECT id, name, protocol, spec, priority, state, created_at, study FROM sweeps WHERE id = $1",
+        ))
+        .bind(id)
+        .fetch_optional(&self.pool)
+        .await?
+        else {
+            return Ok(None);
+        };
+        let progress = self.progress(id).await?;
+        let cost_row = sqlx::query(&self.sql(
+            "SELECT COUNT(*) AS n, SUM(r.wall_time) AS wall, CAST(SUM(r.particle_steps) AS BIGINT) AS steps \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 AND j.state = 'done'",
+        ))
+        .bind(id)
+        .fetch_one(&self.pool)
+        .await?;
+        let cost = Cost {
+            samples: cost_row.get("n"),
+            wall_time: cost_row.get::<Option<f64>, _>("wall").unwrap_or(0.0),
+            particle_steps: cost_row.get::<Option<i64>, _>("steps").unwrap_or(0),
+        };
+        let mean_wall = (cost.samples > 0).then(|| cost.wall_time / cost.samples as f64);
+        let left = progress.queued + progress.running;
+        let eta_seconds = match (mean_wall, progress.running) {
+            (_, _) if left == 0 => Some(0.0),
+            (Some(w), r) if r > 0 => Some(w * left as f64 / r as f64),
+            _ => None,
+        };
+        Ok(Some(SweepInfo {
+            id: row.get("id"),
+            name: row.get("name"),
+            protocol: row.get("protocol"),
+            study: row.get("study"),
+            priority: row.get("priority"),
+            state: row.get("state"),
+            created_at: row.get("created_at"),
+            spec: serde_json::from_str(&row.get::<String, _>("spec"))?,
+            progress,
+            eta_seconds,
+            cost,
+        }))
+    }
+
+    /// The newest sweep queued for a study sweep (`paper/sweep`) that was not cancelled.
+    pub async fn latest_for_study(&self, study: &str) -> Result<Option<String>> {
+        Ok(sqlx::query_scalar(&self.sql(
+            "SELECT id FROM sweeps WHERE study = $1 AND state <> 'cancelled' ORDER BY created_at DESC, id LIMIT 1",
+        ))
+        .bind(study)
+        .fetch_optional(&self.pool)
+        .await?)
+    }
+
+    /// The metrics of every stored sample of a sweep, by sample hash.
+    async fn metric_rows(&self, sweep_id: &str) -> Result<HashMap<String, BTreeMap<String, f64>>> {
+        let rows = sqlx::query(&self.sql(
+            "SELECT m.sample_hash, m.metric, m.value FROM jobs j JOIN metric_values m ON m.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1",
+        ))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        let mut out: HashMap<String, BTreeMap<String, f64>> = HashMap::new();
+        for r in rows {
+            out.entry(r.get("sample_hash"))
+                .or_default()
+                .insert(r.get("metric"), r.get("value"));
+        }
+        Ok(out)
+    }
+
+    /// Every stored sample of a sweep, in job order.
+    pub async fn samples(&self, sweep_id: &str) -> Result<Vec<Sample>> {
+        let rows = sqlx::query(&self.sql(
+            "SELECT j.id AS job_id, j.sample_hash, j.point, j.sample, j.seed, r.outcome, r.reason, r.grains_initial, \
+             r.grains_final, r.grains_lost, r.iterations, r.simulated_time, r.wall_time, r.particle_steps, r.engine \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash WHERE j.sweep_id = $1 ORDER BY j.seq",
+        ))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        let mut metrics = self.metric_rows(sweep_id).await?;
+        rows.into_iter()
+            .map(|r| {
+                let hash: String = r.get("sample_hash");
+                Ok(Sample {
+                    job_id: r.get("job_id"),
+                    metrics: metrics.remove(&hash).unwrap_or_default(),
+                    sample_hash: hash,
+                    point: parse_point(&r.get::<String, _>("point"))?,
+                    sample: r.get("sample"),
+                    seed: r.get("seed"),
+                    outcome: r.get("outcome"),
+                    reason: r.get("reason"),
+                    grains_initial: r.get("grains_initial"),
+                    grains_final: r.get("grains_final"),
+                    grains_lost: r.get("grains_lost"),
+                    iterations: r.get("iterations"),
+                    simulated_time: r.get("simulated_time"),
+                    wall_time: r.get("wall_time"),
+                    particle_steps: r.get("particle_steps"),
+                    engine: r.get("engine"),
+                })
+            })
+            .collect()
+    }
+
+    /// Per-point statistics of every metric, computed in the database from
+    /// counts, sums and sums of squares.
+    pub async fn points(&self, sweep_id: &str) -> Result<Vec<Point>> {
+        let rows = sqlx::query(&self.sql(
+            "SELECT j.point, MIN(j.seq) AS first, COUNT(*) AS samples, \
+             CAST(SUM(CASE WHEN r.outcome = 'completed' THEN 0 ELSE 1 END) AS BIGINT) AS failures \
+             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 GROUP BY j.point ORDER BY first",
+        ))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        let sums = sqlx::query(&self.sql(
+            "SELECT j.point, m.metric, COUNT(m.value) AS n, SUM(m.value) AS s, SUM(m.value * m.value) AS q \
+             FROM jobs j JOIN metric_values m ON m.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 GROUP BY j.point, m.metric",
+        ))
+        .bind(sweep_id)
+        .fetch_all(&self.pool)
+        .await?;
+        let mut metrics: HashMap<String, BTreeMap<String, Aggregate>> = HashMap::new();
+        for r in sums {
+            let agg = Aggregate::from_sums(r.get("n"), r.get("s"), r.get("q"));
+            metrics
+                .entry(r.get("point"))
+                .or_default()
+                .insert(r.get("metric"), agg);
+        }
+        rows.into_iter()
+            .map(|r| {
+                let text: String = r.get("point");
+                Ok(Point {
+                    point: parse_point(&text)?,
+                    samples: r.get("samples"),
+                    failures: r.get("failures"),
+                    metrics: metrics.remove(&text).unwrap_or_default(),
+                })
+            })
+            .collect()
+    }
+
+    /// The full run report of one sample, as stored.
+    pub async fn report(&self, sample_hash: &str) -> Result<Option<serde_json::Value>> {
+        let text: Option<String> =
+            sqlx::query_scalar(&self.sql("SELECT report FROM results WHERE sample_hash = $1"))
+                .bind(sample_hash)
+                .fetch_optional(&self.pool)
+                .await?;
+        Ok(match text {
+            Some(t) => Some(serde_json::from_str(&t)?),
+            None => None,
+        })
+    }
+}
+
+/// One plotted point of a figure: x, the series it belongs to, and the
+/// statistics of the y metric there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct SeriesPoint {
+    #[schema(value_type = Object)]
+    pub x: serde_json::Value,
+    #[schema(value_type = Option<Object>)]
+    pub series: Option<serde_json::Value>,
+    pub n: i64,
+    pub mean: Option<f64>,
+    pub sd: Option<f64>,
+    pub sem: Option<f64>,
+    /// Samples at this point that ended without a result.
+    pub failures: i64,
+}
+
+/// Why a series cannot be drawn from a sweep.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SeriesError {
+    #[error("no sample of the sweep measured `{0}`")]
+    Metric(String),
+    #[error("the sweep does not vary `{0}`")]
+    Axis(String),
+}
+
+/// Picks `x` (and optionally a `series` key) from the points' axis values
+/// and the statistics of metric `y`, sorted by series then x.
+pub fn series(
+    points: &[Point],
+    x: &str,
+    series: Option<&str>,
+    y: &str,
+) -> std::result::Result<Vec<SeriesPoint>, SeriesError> {
+    if !points.iter().any(|p| p.metrics.contains_key(y)) {
+        return Err(SeriesError::Metric(y.to_string()));
+    }
+    for key in std::iter::once(x).chain(series) {
+        if !points.iter().any(|p| p.point.contains_key(key)) {
+            return Err(SeriesError::Axis(key.to_string()));
+        }
+    }
+    let mut out: Vec<SeriesPoint> = points
+        .iter()
+        .map(|p| {
+            let agg = p.metrics.get(y).copied().unwrap_or(Aggregate::EMPTY);
+            SeriesPoint {
+                x: p.point.get(x).cloned().unwrap_or(serde_json::Value::Null),
+                series: series.map(|s| p.point.get(s).cloned().unwrap_or(serde_json::Value::Null)),
+                n: agg.n,
+                mean: agg.mean,
+                sd: agg.sd,
+                sem: agg.sem,
+                failures: p.failures,
+            }
+        })
+        .collect();
+    let key = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    out.sort_by(|a, b| {
+        let sa = a.series.as_ref().map(key).unwrap_or(0.0);
+        let sb = b.series.as_ref().map(key).unwrap_or(0.0);
+        sa.total_cmp(&sb).then(key(&a.x).total_cmp(&key(&b.x)))
+    });
+    Ok(out)
+}

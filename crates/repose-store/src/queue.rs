@@ -1,0 +1,285 @@
+//! The queue: sweeps and their jobs go in, workers claim jobs under a
+//! lease, and each job ends done (its result written in the same
+//! transaction), handed back, or failed.
+
+use crate::{
+    now_ms, Backend, Claim, Created, Lease, NewJob, NewSweep, Result, ResultRecord, Store,
+    StoreError,
+};
+use sqlx::any::AnyRow;
+use sqlx::Row;
+use std::time::Duration;
+
+impl Store {
+    /// Stores a sweep and all its jobs in one transaction. Jobs whose sample
+    /// already has a result are created done (reused).
+    pub async fn create_sweep(
+        &self,
+        sweep: &NewSweep,
+        jobs: &[NewJob],
+        max_attempts: i64,
+    ) -> Result<Created> {
+        let id = uuid::Uuid::new_v4().to_string();
+        let now = now_ms();
+        let mut tx = self.pool.begin().await?;
+        sqlx::query(&self.sql(
+            "INSERT INTO sweeps (id, name, protocol, spec, priority, state, created_at, study) VALUES ($1, $2, $3, $4, $5, 'active', $6, $7)",
+        ))
+        .persistent(false)
+        .bind(&id)
+        .bind(&sweep.name)
+        .bind(&sweep.protocol)
+        .bind(sweep.spec.to_string())
+        .bind(sweep.priority)
+        .bind(now)
+        .bind(sweep.study.as_deref())
+        .execute(&mut *tx)
+        .await?;
+        let mut reused = 0;
+        for (seq, job) in jobs.iter().enumerate() {
+            let known: Option<AnyRow> =
+                sqlx::query(&self.sql("SELECT 1 FROM results WHERE sample_hash = $1"))
+                    .bind(&job.sample_hash)
+                    .fetch_optional(&mut *tx)
+                    .await?;
+            let state = if known.is_some() {
+                reused += 1;
+                "done"
+            } else {
+                "queued"
+            };
+            sqlx::query(&self.sql(
+                "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, created_at, updated_at) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, 0, $10, $11, $11)",
+            ))
+            .bind(uuid::Uuid::new_v4().to_string())
+            .bind(&id)
+            .bind(seq as i64)
+            .bind(serde_json::Value::Object(job.point.clone()).to_string())
+            .bind(job.sample as i64)
+            .bind(job.seed as i64)
+            .bind(&job.sample_hash)
+            .bind(job.scene.to_string())
+            .bind(state)
+            .bind(max_attempts)
+            .bind(now)
+            .execute(&mut *tx)
+            .await?;
+        }
+        tx.commit().await?;
+        Ok(Created {
+            id,
+            jobs: jobs.len(),
+            reused,
+        })
+    }
+
+    /// Returns expired leases to the queue (or fails jobs out of attempts).
+    async fn expire_leases(&self, conn: &mut sqlx::AnyConnection, now: i64) -> Result<()> {
+        sqlx::query(&self.sql(
+            "UPDATE jobs SET state = CASE WHEN attempts >= max_attempts THEN 'failed' ELSE 'queued' END, \
+             error = CASE WHEN attempts >= max_attempts THEN 'lease expired after ' || CAST(attempts AS TEXT) || ' attempts' ELSE error END, \
+             lease_owner = NULL, lease_expires = NULL, updated_at = $1 \
+             WHERE state = 'running' AND lease_expires < $1",
+        ))
+        .bind(now)
+        .execute(&mut *conn)
+        .await?;
+        Ok(())
+    }
+
+    /// Claims the next job for `owner` with a lease of `lease`.
+    pub async fn claim(&self, owner: &str, lease: Duration) -> Result<Option<Claim>> {
+        let now = now_ms();
+        let expires = now + lease.as_millis() as i64;
+        let mut conn = self.pool.acquire().await?;
+        let pick = match self.backend {
+            Backend::Sqlite => {
+                "SELECT j.id FROM jobs j JOIN sweeps s ON s.id = j.sweep_id \
+                 WHERE j.state = 'queued' AND s.state = 'active' ORDER BY s.priority DESC, s.created_at, j.seq LIMIT 1"
+            }
+            Backend::Postgres => {
+                "SELECT j.id FROM jobs j JOIN sweeps s ON s.id = j.sweep_id \
+                 WHERE j.state = 'queued' AND s.state = 'active' ORDER BY s.priority DESC, s.created_at, j.seq LIMIT 1 \
+                 FOR UPDATE OF j SKIP LOCKED"
+            }
+        };
+        let claim_sql = self.sql(&format!(
+            "UPDATE jobs SET state = 'running', lease_owner = $1, lease_expires = $2, attempts = attempts + 1, updated_at = $3 \
+             WHERE id = ({pick}) RETURNING id, sweep_id, sample_hash, scene, attempts"
+        ));
+        let begin = match self.backend {
+            Backend::Sqlite => "BEGIN IMMEDIATE",
+            Backend::Postgres => "BEGIN",
+        };
+        sqlx::query(begin).execute(&mut *conn).await?;
+        let result = async {
+            self.expire_leases(&mut conn, now).await?;
+            let row = sqlx::query(&claim_sql)
+                .bind(owner)
+                .bind(expires)
+                .bind(now)
+                .fetch_optional(&mut *conn)
+                .await?;
+            Ok::<_, StoreError>(row)
+        }
+        .await;
+        match result {
+            Ok(row) => {
+                sqlx::query("COMMIT").execute(&mut *conn).await?;
+                Ok(row.map(|r| Claim {
+                    job_id: r.get("id"),
+                    sweep_id: r.get("sweep_id"),
+                    sample_hash: r.get("sample_hash"),
+                    scene: r.get("scene"),
+                    attempts: r.get("attempts"),
+                    lease_expires: expires,
+                }))
+            }
+            Err(e) => {
+                let _ = sqlx::query("ROLLBACK").execute(&mut *conn).await;
+                Err(e)
+            }
+        }
+    }
+
+    /// Renews the lease of a running job; says whether to go on.
+    pub async fn heartbeat(&self, job_id: &str, owner: &str, lease: Duration) -> Result<Lease> {
+        let now = now_ms();
+        let row = sqlx::query(&self.sql(
+            "UPDATE jobs SET lease_expires = $1, updated_at = $2 WHERE id = $3 AND lease_owner = $4 AND state = 'running' \
+             RETURNING (SELECT state FROM sweeps WHERE sweeps.id = jobs.sweep_id) AS sweep_state",
+        ))
+        .bind(now + lease.as_millis() as i64)
+        .bind(now)
+        .bind(job_id)
+        .bind(owner)
+        .fetch_optional(&self.pool)
+        .await?;
+        Ok(match row {
+            None => Lease::Lost,
+            Some(r) if r.get::<String, _>("sweep_state") == "cancelled" => Lease::Cancelled,
+            Some(_) => Lease::Held,
+        })
+    }
+
+    /// Hands a running job back to the queue without counting the attempt
+    /// (graceful shutdown, or a cancelled sweep).
+    pub async fn release(&self, job_id: &str, owner: &str) -> Result<bool> {
+        let r = sqlx::query(&self.sql(
+            "UPDATE jobs SET state = CASE WHEN (SELECT state FROM sweeps WHERE sweeps.id = jobs.sweep_id) = 'cancelled' \
+             THEN 'cancelled' ELSE 'queued' END, attempts = attempts - 1, lease_owner = NULL, lease_expires = NULL, updated_at = $1 \
+             WHERE id = $2 AND lease_owner = $3 AND state = 'running'",
+        ))
+        .bind(now_ms())
+        .bind(job_id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(r.rows_affected() == 1)
+    }
+
+    /// Stores a finished sample: the job becomes done and its result and
+    /// metric rows are written, together, and only if `owner` still holds
+    /// the lease. Returns false (and writes nothing) when the lease was lost.
+    pub async fn complete(
+        &self,
+        job_id: &str,
+        owner: &str,
+        sample_hash: &str,
+        result: &ResultRecord,
+    ) -> Result<bool> {
+        let now = now_ms();
+        let mut tx = self.pool.begin().await?;
+        let updated = sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'done', lease_owner = NULL, lease_expires = NULL, error = NULL, updated_at = $1 \
+             WHERE id = $2 AND lease_owner = $3 AND state = 'running'",
+        ))
+        .bind(now)
+        .bind(job_id)
+        .bind(owner)
+        .execute(&mut *tx)
+        .await?;
+        if updated.rows_affected() != 1 {
+            tx.rollback().await?;
+            return Ok(false);
+        }
+        let inserted = sqlx::query(&self.sql(
+            "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, grains_initial, grains_final, grains_lost, \
+             iterations, simulated_time, wall_time, report, created_at, particle_steps) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15) \
+             ON CONFLICT (sample_hash) DO NOTHING",
+        ))
+        // Not a cached statement: through `sqlx::Any`, a NULL bound to a
+        // prepared PostgreSQL statement whose parameter was typed by an
+        // earlier non-NULL bind is rejected ("incorrect binary data format").
+        // Completed runs bind a NULL reason, so each insert is prepared with
+        // its own parameters.
+        .persistent(false)
+        .bind(sample_hash)
+        .bind(job_id)
+        .bind(&result.engine)
+        .bind(result.seed as i64)
+        .bind(&result.outcome)
+        .bind(result.reason.as_deref())
+        .bind(result.grains_initial)
+        .bind(result.grains_final)
+        .bind(result.grains_lost)
+        .bind(result.iterations)
+        .bind(result.simulated_time)
+        .bind(result.wall_time)
+        .bind(&result.report)
+        .bind(now)
+        .bind(result.particle_steps)
+        .execute(&mut *tx)
+        .await?;
+        if inserted.rows_affected() == 1 {
+            for (metric, value) in result.metrics.iter().filter(|(_, v)| v.is_finite()) {
+                sqlx::query(&self.sql(
+                    "INSERT INTO metric_values (sample_hash, metric, value) VALUES ($1, $2, $3)",
+                ))
+                .bind(sample_hash)
+                .bind(metric)
+                .bind(*value)
+                .execute(&mut *tx)
+                .await?;
+            }
+        }
+        tx.commit().await?;
+        Ok(true)
+    }
+
+    /// Marks the sweep cancelled and its queued jobs cancelled; running
+    /// jobs learn it at their next heartbeat. Returns false for an unknown sweep.
+    pub async fn cancel_sweep(&self, sweep_id: &str) -> Result<bool> {
+        let mut tx = self.pool.begin().await?;
+        let r = sqlx::query(&self.sql("UPDATE sweeps SET state = 'cancelled' WHERE id = $1"))
+            .bind(sweep_id)
+            .execute(&mut *tx)
+            .await?;
+        sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'cancelled', updated_at = $1 WHERE sweep_id = $2 AND state = 'queued'",
+        ))
+        .bind(now_ms())
+        .bind(sweep_id)
+        .execute(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        Ok(r.rows_affected() == 1)
+    }
+
+    /// Ends a running job without a result (its scene could not be run at all).
+    pub async fn fail(&self, job_id: &str, owner: &str, reason: &str) -> Result<bool> {
+        let r = sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'failed', error = $1, lease_owner = NULL, lease_expires = NULL, updated_at = $2 \
+             WHERE id = $3 AND lease_owner = $4 AND state = 'running'",
+        ))
+        .bind(reason)
+        .bind(now_ms())
+        .bind(job_id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(r.rows_affected() == 1)
+    }
+}

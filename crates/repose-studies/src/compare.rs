@@ -1,0 +1,149 @@
+//! A paper's stated results against ours: each row a quantity, the paper's
+//! value or statement, our statistics, the difference in combined standard
+//! errors and a verdict.
+
+use repose_store::Aggregate;
+use serde::{Deserialize, Serialize};
+
+/// One line of the comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct Comparison {
+    pub quantity: String,
+    /// The paper's value or statement.
+    pub paper: String,
+    pub ours: Option<Aggregate>,
+    /// (ours − paper) in combined standard errors, where both are numbers.
+    pub sigma: Option<f64>,
+    /// `agrees`, `differs`, `not resolved` or `no result`.
+    pub verdict: String,
+    /// Why it differs, or what the number rests on.
+    pub reason: String,
+}
+
+/// Two differences within this many combined standard errors agree.
+pub const AGREEMENT: f64 = 2.0;
+
+impl Comparison {
+    /// Ours against a value the paper quotes as mean ± sd over `n` samples.
+    pub fn quoted(
+        quantity: String,
+        (mean, sd, n): (f64, f64, f64),
+        ours: Option<Aggregate>,
+        why_differs: &str,
+    ) -> Comparison {
+        let sigma = ours.and_then(|o| {
+            let se = (o.sem.unwrap_or(0.0).powi(2) + sd * sd / n).sqrt();
+            Some((o.mean? - mean) / se)
+        });
+        let verdict = verdict(sigma);
+        Comparison {
+            quantity,
+            paper: format!("{mean:.2} ± {sd:.2} (n={n})"),
+            ours,
+            sigma,
+            reason: if verdict == "differs" {
+                why_differs.to_string()
+            } else {
+                String::new()
+            },
+            verdict,
+        }
+    }
+
+    /// A qualitative statement of the paper, judged by `agrees`.
+    pub fn statement(
+        quantity: impl Into<String>,
+        paper: impl Into<String>,
+        ours: Option<Aggregate>,
+        sigma: Option<f64>,
+        agrees: bool,
+        reason: impl Into<String>,
+    ) -> Comparison {
+        Comparison {
+            quantity: quantity.into(),
+            paper: paper.into(),
+            ours,
+            sigma,
+            verdict: if agrees { "agrees" } else { "differs" }.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// `agrees` within [`AGREEMENT`] standard errors, else `differs`.
+pub fn verdict(sigma: Option<f64>) -> String {
+    match sigma {
+        None => "no result".into(),
+        Some(s) if s.abs() <= AGREEMENT => "agrees".into(),
+        Some(_) => "differs".into(),
+    }
+}
+
+/// `mean ± sd (n=…)`, or a dash.
+pub fn fmt_agg(a: Option<Aggregate>) -> String {
+    match a {
+        Some(Aggregate {
+            n,
+            mean: Some(m),
+            sd,
+            ..
+        }) => format!("{m:.2} ± {:.2} (n={n})", sd.unwrap_or(0.0)),
+        _ => "—".into(),
+    }
+}
+
+/// Weighted least-squares slope of `y` against `x` (weights 1/sem²) with
+/// its standard error, from at least two points.
+pub fn weighted_slope(points: &[(f64, Aggregate)]) -> Option<(f64, f64)> {
+    if points.len() < 2 {
+        return None;
+    }
+    let (mut sw, mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (x, a) in points {
+        let y = a.mean?;
+        let w = 1.0 / a.sem.unwrap_or(0.0).max(1e-6).powi(2);
+        sw += w;
+        sx += w * x;
+        sy += w * y;
+        sxx += w * x * x;
+        sxy += w * x * y;
+    }
+    let d = sw * sxx - sx * sx;
+    (d > 0.0).then(|| ((sw * sxy - sx * sy) / d, (sw / d).sqrt()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn agg(mean: f64, sem: f64) -> Aggregate {
+        Aggregate {
+            n: 20,
+            mean: Some(mean),
+            sd: Some(sem * 20f64.sqrt()),
+            sem: Some(sem),
+        }
+    }
+
+    #[test]
+    fn a_value_within_two_combined_errors_agrees() {
+        let c = Comparison::quoted("θ".into(), (10.0, 1.0, 25.0), Some(agg(10.3, 0.1)), "why");
+        // se = sqrt(0.01 + 0.04) = 0.224; 0.3 / 0.224 = 1.34
+        assert_eq!(c.verdict, "agrees");
+        assert!((c.sigma.unwrap() - 1.3416).abs() < 1e-3);
+        let c = Comparison::quoted("θ".into(), (10.0, 1.0, 25.0), Some(agg(11.0, 0.1)), "why");
+        assert_eq!((c.verdict.as_str(), c.reason.as_str()), ("differs", "why"));
+        let c = Comparison::quoted("θ".into(), (10.0, 1.0, 25.0), None, "why");
+        assert_eq!(c.verdict, "no result");
+    }
+
+    #[test]
+    fn the_slope_of_points_on_a_line_is_recovered() {
+        let pts: Vec<(f64, Aggregate)> = (0..5)
+            .map(|k| (k as f64, agg(2.0 + 0.5 * k as f64, 0.1)))
+            .collect();
+        let (slope, se) = weighted_slope(&pts).unwrap();
+        assert!((slope - 0.5).abs() < 1e-12);
+        assert!(se > 0.0 && se < 0.1);
+    }
+}

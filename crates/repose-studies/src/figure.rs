@@ -1,0 +1,425 @@
+//! A figure's data: what the API serves, the page draws and the
+//! reproduction report prints, computed from the stored points and samples
+//! of the sweeps behind it, with its theory curves evaluated here.
+
+use crate::data::{same, StudyData, SweepData};
+use crate::papers::{Figure, Layer};
+use repose_store::Aggregate;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// What a figure shows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct FigureData {
+    pub paper: String,
+    pub figure: String,
+    pub title: String,
+    pub caption: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub log_x: bool,
+    /// The swept axis the measured series plot along, and the series axis.
+    pub x: Option<String>,
+    pub series_axis: Option<String>,
+    pub series: Vec<SeriesData>,
+    /// The sweep each study key was read from.
+    pub sweeps: BTreeMap<String, String>,
+    /// Study sweeps the figure reads that have no data yet.
+    pub missing: Vec<String>,
+}
+
+/// What kind of series it is, for drawing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Means with error bars (and the single samples).
+    Measured,
+    /// A theory curve.
+    Theory,
+    /// Values quoted from the paper.
+    Quoted,
+    /// A curve recorded during one run.
+    Recorded,
+    /// A level line.
+    Level,
+}
+
+/// One series of a figure.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct SeriesData {
+    pub name: String,
+    pub kind: Kind,
+    /// The value of the series axis, for measured series split by one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
+    pub series_value: Option<Value>,
+    pub points: Vec<PlotPoint>,
+    /// A band to shade (e.g. the steady mean ± sd of a recorded curve).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band: Option<Band>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct Band {
+    pub lo: f64,
+    pub hi: f64,
+    pub mean: f64,
+}
+
+/// One plotted point: a mean with its statistics, or a plain value.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct PlotPoint {
+    pub x: f64,
+    pub y: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sd: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sem: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n: Option<i64>,
+    /// Samples at this point that ended without a result.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failures: Option<i64>,
+    /// The single samples' values.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub samples: Vec<f64>,
+}
+
+impl PlotPoint {
+    fn value(x: f64, y: f64) -> Self {
+        PlotPoint {
+            x,
+            y: Some(y),
+            sd: None,
+            sem: None,
+            n: None,
+            failures: None,
+            samples: Vec::new(),
+        }
+    }
+}
+
+/// Why a figure cannot be drawn from a sweep.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FigureError {
+    #[error("the sweep does not vary `{0}`")]
+    Axis(String),
+    #[error("no sample of the sweep measured `{0}`")]
+    Metric(String),
+}
+
+impl Figure {
+    /// The figure from the data of its study sweeps; sweeps without data
+    /// are listed as missing and their layers left out.
+    pub fn data(&self, paper: &str, study: &StudyData) -> FigureData {
+        let (x, series_axis) = self.axes().unzip();
+        let mut out = FigureData {
+            paper: paper.to_string(),
+            figure: self.key.to_string(),
+            title: self.title.to_string(),
+            caption: self.caption.to_string(),
+            x_label: self.x_label.to_string(),
+            y_label: self.y_label.to_string(),
+            log_x: self.log_x,
+            x: x.map(String::from),
+            series_axis: series_axis.flatten().map(String::from),
+            series: Vec::new(),
+            sweeps: BTreeMap::new(),
+            missing: Vec::new(),
+        };
+        for key in self.sweeps() {
+            match study.get(&key) {
+                Some(d) => {
+                    out.sweeps.insert(key, d.id.clone());
+                }
+                None => out.missing.push(key),
+            }
+        }
+        for layer in &self.layers {
+            out.series.extend(self.layer(layer, study));
+        }
+        let range = x_range(&out.series);
+        for layer in &self.layers {
+            if let (Layer::Curve { label, f }, Some((lo, hi))) = (layer, range) {
+                out.series.push(curve(label, *f, lo, hi, self.log_x));
+            }
+        }
+        level_lines(&self.layers, study, range, &mut out.series);
+        out
+    }
+
+    /// Whether the figure can be drawn from this one sweep: its measured
+    /// layers' axes are swept and their metrics measured.
+    pub fn fits(&self, sweep: &SweepData) -> Result<(), FigureError> {
+        for layer in &self.layers {
+            if let Layer::Measured { x, series, y, .. } = layer {
+                for axis in std::iter::once(*x).chain(*series) {
+                    if !sweep.points.iter().any(|p| p.point.contains_key(axis)) {
+                        return Err(FigureError::Axis(axis.to_string()));
+                    }
+                }
+                for m in y.iter() {
+                    if !sweep.points.iter().any(|p| p.metrics.contains_key(*m)) {
+                        return Err(FigureError::Metric(m.to_string()));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The figure drawn from one sweep for every study key it reads.
+    pub fn from_sweep(&self, paper: &str, sweep: SweepData) -> Result<FigureData, FigureError> {
+        self.fits(&sweep)?;
+        let mut study = StudyData::default();
+        for key in self.sweeps() {
+            study.sweeps.insert(key, sweep.clone());
+        }
+        Ok(self.data(paper, &study))
+    }
+
+    fn layer(&self, layer: &Layer, study: &StudyData) -> Vec<SeriesData> {
+        match layer {
+            Layer::Measured {
+                sweep,
+                x,
+                series,
+                y,
+                label,
+            } => study
+                .get(sweep)
+                .map(|d| measured(d, x, *series, y, label))
+                .unwrap_or_default(),
+            Layer::AtPoints {
+                sweep,
+                x,
+                input,
+                label,
+                f,
+            } => study
+                .get(sweep)
+                .map(|d| vec![at_points(d, x, input, label, *f)])
+                .unwrap_or_default(),
+            Layer::Quoted { label, points } => vec![SeriesData {
+                name: label.to_string(),
+                kind: Kind::Quoted,
+                series_value: None,
+                points: points
+                    .iter()
+                    .map(|(x, y, e)| PlotPoint {
+                        sd: Some(*e),
+                        ..PlotPoint::value(*x, *y)
+                    })
+                    .collect(),
+                band: None,
+            }],
+            Layer::Recorded {
+                sweep,
+                curve,
+                label,
+            } => study
+                .get(sweep)
+                .and_then(|d| recorded(d, curve, label))
+                .into_iter()
+                .collect(),
+            Layer::Curve { .. } | Layer::Level { .. } => Vec::new(),
+        }
+    }
+}
+
+/// Statistics of the sum of several metrics at a point (sd and sem in quadrature).
+fn summed(p: &repose_store::Point, y: &[&str]) -> Option<Aggregate> {
+    let aggs: Vec<Aggregate> = y
+        .iter()
+        .map(|m| p.metrics.get(*m).copied().filter(|a| a.n > 0))
+        .collect::<Option<_>>()?;
+    let quad = |f: fn(&Aggregate) -> Option<f64>| -> Option<f64> {
+        aggs.iter()
+            .map(|a| f(a).map(|v| v * v))
+            .sum::<Option<f64>>()
+            .map(f64::sqrt)
+    };
+    Some(Aggregate {
+        n: aggs.iter().map(|a| a.n).min().unwrap_or(0),
+        mean: aggs.iter().map(|a| a.mean).sum(),
+        sd: quad(|a| a.sd),
+        sem: quad(|a| a.sem),
+    })
+}
+
+fn measured(
+    d: &SweepData,
+    x: &str,
+    series: Option<&str>,
+    y: &[&str],
+    label: &str,
+) -> Vec<SeriesData> {
+    // Series values in order of first appearance, then sorted numerically.
+    let mut values: Vec<Option<Value>> = Vec::new();
+    for p in &d.points {
+        let v = series.map(|s| p.point.get(s).cloned().unwrap_or(Value::Null));
+        if !values.contains(&v) {
+            values.push(v);
+        }
+    }
+    let key = |v: &Option<Value>| v.as_ref().and_then(Value::as_f64).unwrap_or(0.0);
+    values.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    values
+        .into_iter()
+        .map(|value| {
+            let mut points: Vec<PlotPoint> = d
+                .points
+                .iter()
+                .filter(|p| series.map(|s| p.point.get(s).cloned().unwrap_or(Value::Null)) == value)
+                .filter_map(|p| {
+                    let xv = p.point.get(x)?.as_f64()?;
+                    let agg = summed(p, y).unwrap_or(Aggregate::EMPTY);
+                    Some(PlotPoint {
+                        x: xv,
+                        y: agg.mean,
+                        sd: agg.sd,
+                        sem: agg.sem,
+                        n: Some(agg.n),
+                        failures: Some(p.failures),
+                        samples: sample_values(d, &p.point, y),
+                    })
+                })
+                .collect();
+            points.sort_by(|a, b| a.x.total_cmp(&b.x));
+            let name = match (&value, series) {
+                (Some(v), Some(s)) => format!("{s} = {v}"),
+                _ => label.to_string(),
+            };
+            SeriesData {
+                name,
+                kind: Kind::Measured,
+                series_value: value,
+                points,
+                band: None,
+            }
+        })
+        .collect()
+}
+
+/// The values of the single samples at a point (summed over `y`).
+fn sample_values(d: &SweepData, point: &serde_json::Map<String, Value>, y: &[&str]) -> Vec<f64> {
+    d.samples
+        .iter()
+        .filter(|s| &s.point == point)
+        .filter_map(|s| {
+            y.iter()
+                .map(|m| s.metrics.get(*m).copied())
+                .sum::<Option<f64>>()
+        })
+        .collect()
+}
+
+fn at_points(
+    d: &SweepData,
+    x: &str,
+    input: &str,
+    label: &str,
+    f: fn(f64, f64) -> Option<f64>,
+) -> SeriesData {
+    let points = d
+        .along(x, None, input)
+        .into_iter()
+        .filter_map(|(xv, a)| Some(PlotPoint::value(xv, f(xv, a.mean?)?)))
+        .collect();
+    SeriesData {
+        name: label.to_string(),
+        kind: Kind::Theory,
+        series_value: None,
+        points,
+        band: None,
+    }
+}
+
+fn recorded(d: &SweepData, curve: &str, label: &str) -> Option<SeriesData> {
+    let report = d.report.as_ref()?;
+    let c = report["series"]
+        .as_array()?
+        .iter()
+        .find(|c| c["name"] == curve)?;
+    let points = c["points"]
+        .as_array()?
+        .iter()
+        .filter_map(|p| Some(PlotPoint::value(p[0].as_f64()?, p[1].as_f64()?)))
+        .collect();
+    let band = serde_json::from_value(c["band"].clone()).ok();
+    Some(SeriesData {
+        name: label.to_string(),
+        kind: Kind::Recorded,
+        series_value: None,
+        points,
+        band,
+    })
+}
+
+/// The x range the measured and recorded series span.
+fn x_range(series: &[SeriesData]) -> Option<(f64, f64)> {
+    let xs = series
+        .iter()
+        .filter(|s| matches!(s.kind, Kind::Measured | Kind::Recorded))
+        .flat_map(|s| s.points.iter().map(|p| p.x));
+    xs.fold(None, |r, x| match r {
+        None => Some((x, x)),
+        Some((lo, hi)) => Some((lo.min(x), hi.max(x))),
+    })
+}
+
+/// A theory curve sampled at 41 points over `[lo, hi]`.
+fn curve(label: &str, f: fn(f64) -> Option<f64>, lo: f64, hi: f64, log: bool) -> SeriesData {
+    let at = |k: usize| {
+        let t = k as f64 / 40.0;
+        if log && lo > 0.0 {
+            lo * (hi / lo).powf(t)
+        } else {
+            lo + (hi - lo) * t
+        }
+    };
+    SeriesData {
+        name: label.to_string(),
+        kind: Kind::Theory,
+        series_value: None,
+        points: (0..=40)
+            .filter_map(|k| Some(PlotPoint::value(at(k), f(at(k))?)))
+            .collect(),
+        band: None,
+    }
+}
+
+fn level_lines(
+    layers: &[Layer],
+    study: &StudyData,
+    range: Option<(f64, f64)>,
+    out: &mut Vec<SeriesData>,
+) {
+    let Some((lo, hi)) = range else { return };
+    for layer in layers {
+        let Layer::Level {
+            sweep,
+            at,
+            metric,
+            label,
+        } = layer
+        else {
+            continue;
+        };
+        let level = study
+            .get(sweep)
+            .and_then(|d| d.points.iter().find(|p| same(p.point.get(at.0), at.1)))
+            .and_then(|p| p.metrics.get(*metric))
+            .and_then(|a| a.mean);
+        if let Some(y) = level {
+            out.push(SeriesData {
+                name: label.to_string(),
+                kind: Kind::Level,
+                series_value: None,
+                points: vec![PlotPoint::value(lo, y), PlotPoint::value(hi, y)],
+                band: None,
+            });
+        }
+    }
+}

@@ -1,0 +1,30 @@
+//! # repose-studies
+//!
+//! The papers' studies as data, and the reports written from them.
+//!
+//! * [`spec`] — a sweep: protocol, base scene, axes, samples, fidelity; its
+//!   expansion into one validated, resolved scene per job.
+//! * [`papers`] — each paper's study sweeps and figures (which metric
+//!   against which axis, theory curves, the values the paper quotes) and the
+//!   comparison of its stated results with ours.
+//! * [`figure`] — a figure's data from the stored points and samples of
+//!   its sweeps: what the API serves, the page draws and the reports print.
+//! * [`reproduction`] and [`tradeoff`] — the two reports: a paper reproduced
+//!   through the service, and what each fidelity setting costs and changes.
+//! * [`chart`] — static SVG charts for the reports.
+//!
+//! **Architecture Invariant:** theory is evaluated here, in Rust, once. The
+//! page draws the curves the API serves; it has no copy of an equation.
+
+pub mod chart;
+pub mod compare;
+pub mod data;
+pub mod figure;
+pub mod papers;
+pub mod reproduction;
+pub mod spec;
+pub mod tradeoff;
+
+pub use figure::FigureData;
+pub use papers::{Paper, PAPERS};
+pub use spec::{JobSpec, SweepSpec};
