@@ -82,8 +82,16 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
         for p in points {
             let stored = &by_point[&p["point"].to_string()];
             for metric in ["theta_r", "theta_r_line", "theta_r_endpoints", "theta_t"] {
-                let values: Vec<f64> = stored.iter().filter_map(|s| s[metric].as_f64()).collect();
+                let values: Vec<f64> = stored
+                    .iter()
+                    .filter_map(|s| s["metrics"][metric].as_f64())
+                    .collect();
                 let reported = &p["metrics"][metric];
+                if reported.is_null() {
+                    // Not a metric of this sweep's protocol.
+                    assert!(values.is_empty(), "{id} {metric}");
+                    continue;
+                }
                 assert_eq!(reported["n"].as_u64().unwrap() as usize, values.len());
                 if values.len() < 2 {
                     continue;
@@ -130,6 +138,32 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
     let (low, mid, high) = (at(0.1), at(0.2), at(0.3));
     println!("θ_R: μ 0.1 {low:.2}°, 0.2 {mid:.2}°, 0.3 {high:.2}°");
     assert!(high > low + 5.0, "θ_R does not rise with μ: {low} → {high}");
+
+    // Each figure in the report is the figure data the API serves the page
+    // for the same sweeps.
+    let bindings: Vec<String> = sweeps
+        .iter()
+        .map(|s| {
+            format!(
+                "{}:{}",
+                s["key"].as_str().unwrap(),
+                s["id"].as_str().unwrap()
+            )
+        })
+        .collect();
+    let figures = numbers["figures"].as_array().unwrap();
+    assert_eq!(figures.len(), 9);
+    for f in figures {
+        let key = f["figure"].as_str().unwrap();
+        let served = get(&format!(
+            "{}/api/studies/lh93/figures/{key}?sweeps={}",
+            server.url,
+            bindings.join(",")
+        ))
+        .await;
+        assert_eq!(&served, f, "figure {key}");
+        assert!(f["missing"].as_array().unwrap().is_empty(), "{key}: {f}");
+    }
 
     // The page can open the report the server carries.
     let resp = reqwest::get(format!("{}/docs/reproduction.md", server.url))

@@ -3,8 +3,8 @@
 //! `REPOSE_TEST_POSTGRES`). With `CI=true` the PostgreSQL tests fail when
 //! the server is unreachable; elsewhere they skip with a message.
 
-use repose_store::spec::SweepSpec;
 use repose_store::Store;
+use repose_studies::{JobSpec, SweepSpec};
 use serde_json::{json, Value};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{finished, get, scratch, wait_until, Server, BIN};
+use common::{create, finished, get, scratch, signal, wait_until, Server, BIN};
 
 fn worker(database: &str, extra: &[&str]) -> Child {
     Command::new(BIN)
@@ -38,12 +38,6 @@ fn run_workers_until_idle(database: &str, count: usize) -> Vec<String> {
             stderr
         })
         .collect()
-}
-
-fn signal(child: &Child, sig: i32) {
-    unsafe {
-        libc::kill(child.id() as i32, sig);
-    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -82,16 +76,22 @@ async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
     let samples = samples["samples"].as_array().unwrap().clone();
     assert_eq!(samples.len(), 6);
     let points = get(&format!("{}/api/sweeps/{id}/points", server.url)).await;
-    let fig = get(&format!("{}/api/sweeps/{id}/figures/3", server.url)).await;
+    let fig = get(&format!("{}/api/sweeps/{id}/figures/lh93/3", server.url)).await;
     assert_eq!(fig["x"], "contact.mu");
-    let series = fig["points"].as_array().unwrap();
+    let measured = fig["series"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["kind"] == "measured")
+        .unwrap();
+    let series = measured["points"].as_array().unwrap();
     assert_eq!(series.len(), 2);
     for p in points["points"].as_array().unwrap() {
         // recompute the statistics from the stored samples
         let values: Vec<f64> = samples
             .iter()
             .filter(|s| s["point"] == p["point"])
-            .filter_map(|s| s["theta_r"].as_f64())
+            .filter_map(|s| s["metrics"]["theta_r"].as_f64())
             .collect();
         let n = values.len() as f64;
         let mean = values.iter().sum::<f64>() / n;
@@ -108,12 +108,23 @@ async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
             .iter()
             .find(|s| s["x"] == p["point"]["contact.mu"])
             .unwrap();
-        assert_eq!(on_figure["mean"], m["mean"]);
+        assert_eq!(on_figure["y"], m["mean"]);
         assert_eq!(on_figure["sd"], m["sd"]);
+        // The figure carries the single samples behind each mean.
+        let mut drawn: Vec<f64> = on_figure["samples"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let mut stored = values.clone();
+        drawn.sort_by(f64::total_cmp);
+        stored.sort_by(f64::total_cmp);
+        assert_eq!(drawn, stored);
     }
     // the physics came through: more friction, steeper pile
     assert!(
-        series[1]["mean"].as_f64().unwrap() > series[0]["mean"].as_f64().unwrap() + 5.0,
+        series[1]["y"].as_f64().unwrap() > series[0]["y"].as_f64().unwrap() + 5.0,
         "{fig}"
     );
     // every sample's full report is there, with its seed and engine
@@ -198,11 +209,7 @@ async fn postgres() -> Option<PgDatabase> {
     }
 }
 
-async fn assert_every_job_done_once(
-    store: &Store,
-    sweep: &str,
-    jobs: &[repose_store::spec::JobSpec],
-) {
+async fn assert_every_job_done_once(store: &Store, sweep: &str, jobs: &[JobSpec]) {
     let p = store.progress(sweep).await.unwrap();
     assert_eq!(
         (p.done, p.queued, p.running, p.failed),
@@ -225,8 +232,7 @@ async fn worker_processes_on_postgres_do_every_job_exactly_once() {
     let url = db.url.clone();
     let store = Store::open(&url).await.unwrap();
     let spec = cheap_sweep(60);
-    let jobs = spec.expand().unwrap();
-    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    let (created, jobs) = create(&store, &spec, 3).await;
     run_workers_until_idle(&url, 4);
     assert_every_job_done_once(&store, &created.id, &jobs).await;
     // the work was shared
@@ -243,8 +249,7 @@ async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
     let url = format!("sqlite://{}", scratch("busy.db").display());
     let store = Store::open(&url).await.unwrap();
     let spec = cheap_sweep(120);
-    let jobs = spec.expand().unwrap();
-    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    let (created, jobs) = create(&store, &spec, 3).await;
     for stderr in run_workers_until_idle(&url, 4) {
         assert!(!stderr.contains("locked"), "{stderr}");
     }
@@ -252,12 +257,11 @@ async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
 }
 
 /// One real pile (about two seconds of work) on the given database.
-async fn one_long_job(url: &str) -> (Store, String, Vec<repose_store::spec::JobSpec>) {
+async fn one_long_job(url: &str) -> (Store, String, Vec<JobSpec>) {
     let store = Store::open(url).await.unwrap();
     let spec: SweepSpec =
         serde_json::from_value(json!({"protocol": "fill_release", "samples": 1})).unwrap();
-    let jobs = spec.expand().unwrap();
-    let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+    let (created, jobs) = create(&store, &spec, 3).await;
     (store, created.id, jobs)
 }
 
@@ -280,7 +284,7 @@ async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
     let mut doomed = worker(&url, &["--lease", "1.5", "--heartbeat", "0.3"]);
     wait_running(&store, &sweep).await;
     tokio::time::sleep(Duration::from_millis(300)).await;
-    signal(&doomed, libc::SIGKILL);
+    signal(&doomed, "KILL");
     doomed.wait().unwrap();
     let rescuer = worker(&url, &["--lease", "1.5", "--heartbeat", "0.3"]);
     let start = Instant::now();
@@ -291,7 +295,7 @@ async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
         );
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
-    signal(&rescuer, libc::SIGTERM);
+    signal(&rescuer, "TERM");
     let out = rescuer.wait_with_output().unwrap();
     assert!(out.status.success());
     assert_every_job_done_once(&store, &sweep, &jobs).await;
@@ -309,7 +313,7 @@ async fn sigterm_hands_the_running_job_back_unwritten() {
     let (store, sweep, _) = one_long_job(&url).await;
     let w = worker(&url, &[]);
     wait_running(&store, &sweep).await;
-    signal(&w, libc::SIGTERM);
+    signal(&w, "TERM");
     let out = w.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
@@ -375,7 +379,10 @@ async fn a_sample_that_fails_is_stored_with_its_reason_and_no_angle() {
             assert_eq!(s["outcome"], "failed", "{s}");
             let reason = s["reason"].as_str().unwrap_or_default();
             assert!(reason.contains("time step"), "{s}");
-            assert!(s["theta_r"].is_null(), "a failed run reports no angle: {s}");
+            assert!(
+                s["metrics"]["theta_r"].is_null(),
+                "a failed run reports no angle: {s}"
+            );
             // The full report carries the same reason.
             let hash = s["sample_hash"].as_str().unwrap();
             let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
@@ -391,7 +398,7 @@ async fn a_sample_that_fails_is_stored_with_its_reason_and_no_angle() {
             );
         } else {
             assert_eq!(s["outcome"], "completed", "{s}");
-            assert!(s["theta_r"].as_f64().is_some(), "{s}");
+            assert!(s["metrics"]["theta_r"].as_f64().is_some(), "{s}");
         }
     }
     let points = get(&format!("{}/api/sweeps/{id}/points", server.url)).await;

@@ -2,6 +2,8 @@
 //! `repose serve` on an ephemeral port.
 #![allow(dead_code)]
 
+use repose_store::{Created, Store};
+use repose_studies::{JobSpec, SweepSpec};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -116,4 +118,24 @@ pub async fn run_sweep(server: &Server, spec: &Value) -> String {
     )
     .await;
     id
+}
+
+/// Expands a sweep and stores it with its jobs, as the API does.
+pub async fn create(store: &Store, spec: &SweepSpec, max_attempts: i64) -> (Created, Vec<JobSpec>) {
+    let jobs = spec.expand().unwrap();
+    let new: Vec<_> = jobs.iter().map(JobSpec::to_new_job).collect();
+    let created = store
+        .create_sweep(&spec.new_sweep(), &new, max_attempts)
+        .await
+        .unwrap();
+    (created, jobs)
+}
+
+/// Sends a signal (`TERM`, `KILL`) to a child process.
+pub fn signal(child: &Child, name: &str) {
+    let status = Command::new("kill")
+        .args(["-s", name, &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success(), "kill -s {name} failed");
 }

@@ -91,7 +91,10 @@ async fn unknown_things_are_404() {
         "/api/sweeps/no-such-id",
         "/api/sweeps/no-such-id/points",
         "/api/sweeps/no-such-id/samples?format=csv",
-        "/api/sweeps/no-such-id/figures/3",
+        "/api/sweeps/no-such-id/figures/lh93/3",
+        "/api/studies/xx99",
+        "/api/studies/xx99/figures/3",
+        "/api/studies/lh93/figures/99",
         "/api/samples/abc",
         "/api/nothing-here",
     ] {
@@ -130,7 +133,7 @@ async fn a_sweep_is_created_listed_shown_and_cancelled() {
     .await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
     assert_eq!(err["errors"][0]["field"], "x");
-    let (status, _, _) = call(&s, "GET", &format!("/api/sweeps/{id}/figures/9"), None).await;
+    let (status, _, _) = call(&s, "GET", &format!("/api/sweeps/{id}/figures/lh93/9"), None).await;
     assert_eq!(status, StatusCode::NOT_FOUND);
     let (status, _, _) = call(
         &s,
@@ -158,10 +161,127 @@ async fn health_and_the_openapi_document_are_served() {
     for path in [
         "/api/sweeps",
         "/api/sweeps/{id}/points",
-        "/api/sweeps/{id}/figures/{figure}",
+        "/api/sweeps/{id}/figures/{paper}/{figure}",
+        "/api/protocols",
+        "/api/studies/{paper}/sweeps/{key}",
+        "/api/studies/{paper}/figures/{figure}",
     ] {
         assert!(doc["paths"][path].is_object(), "{path}");
     }
+    // The schemas come from the handlers' types: a sweep spec's fields and
+    // a figure's series are described, and every reference resolves.
+    let schemas = &doc["components"]["schemas"];
+    for field in ["protocol", "base", "axes", "samples", "fidelity", "study"] {
+        assert!(
+            schemas["SweepSpec"]["properties"][field].is_object(),
+            "{field}"
+        );
+    }
+    assert!(schemas["FigureData"]["properties"]["series"].is_object());
+    let text = doc.to_string();
+    for r in text.split("\"$ref\":\"#/components/schemas/").skip(1) {
+        let name = &r[..r.find('"').unwrap()];
+        assert!(schemas[name].is_object(), "dangling $ref {name}");
+    }
+}
+
+#[tokio::test]
+async fn protocols_are_described_from_the_registry() {
+    let s = store().await;
+    let (status, list, text) = call(&s, "GET", "/api/protocols", None).await;
+    assert_eq!(status, StatusCode::OK, "{text}");
+    let protocols = list["protocols"].as_array().unwrap();
+    let names: Vec<&str> = protocols
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, repose_physics::protocols::names());
+    let tilt = protocols.iter().find(|p| p["name"] == "tilt").unwrap();
+    let metrics: Vec<&str> = tilt["metrics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        metrics,
+        ["theta_r", "theta_r_line", "theta_r_endpoints", "theta_t"]
+    );
+    let sections = tilt["sections"].as_array().unwrap();
+    let tilt_section = sections.iter().find(|x| x["key"] == "tilt").unwrap();
+    assert_eq!(tilt_section["defaults"]["rate"], 10.0);
+    assert_eq!(tilt["presets"]["quick"]["numerics.integrator"], "verlet");
+}
+
+#[tokio::test]
+async fn a_papers_sweep_is_queued_by_its_key_and_reused_when_queued_again() {
+    let s = store().await;
+    let (status, studies, _) = call(&s, "GET", "/api/studies", None).await;
+    assert_eq!(status, StatusCode::OK);
+    let lh93 = &studies["studies"][0];
+    assert_eq!(lh93["key"], "lh93");
+    let figure3 = lh93["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["key"] == "3")
+        .unwrap();
+    assert_eq!(figure3["sweeps"], json!(["fig347"]));
+    let body = json!({"fidelity": "quick", "reduced": true}).to_string();
+    let (status, created, text) =
+        call(&s, "POST", "/api/studies/lh93/sweeps/fig347", Some(&body)).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_eq!(created["jobs"], 9);
+    let id = created["id"].as_str().unwrap();
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(sweep["study"], "lh93/fig347");
+    assert_eq!(sweep["protocol"], "tilt");
+    assert_eq!(sweep["spec"]["fidelity"], "quick");
+    // The figure names the sweep it reads even before any sample is done.
+    let (status, fig, text) = call(&s, "GET", "/api/studies/lh93/figures/3", None).await;
+    assert_eq!(status, StatusCode::OK, "{text}");
+    assert_eq!(fig["sweeps"]["fig347"], id);
+    assert_eq!(
+        fig["series"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|x| x["kind"] == "quoted")
+            .count(),
+        1
+    );
+    for (uri, body, status, field) in [
+        (
+            "/api/studies/lh93/sweeps/fig347",
+            r#"{"fidelity": "slow"}"#,
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "fidelity",
+        ),
+        (
+            "/api/studies/lh93/sweeps/fig347",
+            r#"{"samples": 0}"#,
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "samples",
+        ),
+        (
+            "/api/studies/lh93/sweeps/fig347",
+            r#"{"colour": 1}"#,
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "colour",
+        ),
+        (
+            "/api/studies/lh93/sweeps/fig347",
+            "{nope",
+            StatusCode::BAD_REQUEST,
+            "(body)",
+        ),
+    ] {
+        let (got, json, text) = call(&s, "POST", uri, Some(body)).await;
+        assert_eq!(got, status, "{body}: {text}");
+        assert_eq!(json["errors"][0]["field"], field, "{body}: {text}");
+    }
+    let (status, _, _) = call(&s, "POST", "/api/studies/lh93/sweeps/fig99", None).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
 }
 
 #[tokio::test]
@@ -203,8 +323,9 @@ async fn a_sweep_reports_what_its_samples_cost() {
         let scene = repose_physics::Scene::from_toml(&job.scene, &[]).unwrap();
         let report = repose_physics::run(&scene, &mut repose_physics::Quiet).unwrap();
         steps += report.particle_steps as i64;
+        let record = repose_worker::record(&report).unwrap();
         assert!(s
-            .complete(&job.job_id, "test", &job.sample_hash, &report)
+            .complete(&job.job_id, "test", &job.sample_hash, &record)
             .await
             .unwrap());
     }
@@ -219,4 +340,22 @@ async fn a_sweep_reports_what_its_samples_cost() {
     assert_eq!(report["scene"]["preset"], "quick");
     assert_eq!(report["options"]["preset"], "quick");
     assert_eq!(report["scene"]["numerics"]["dt_factor"], 0.05);
+    // Points carry every metric the protocol declares; the CSV has a
+    // column for each.
+    let (_, points, _) = call(&s, "GET", &format!("/api/sweeps/{id}/points"), None).await;
+    let metrics = points["points"][0]["metrics"].as_object().unwrap();
+    let names: Vec<&String> = metrics.keys().collect();
+    assert_eq!(names, ["theta_r", "theta_r_endpoints", "theta_r_line"]);
+    let (status, _, csv) = call(
+        &s,
+        "GET",
+        &format!("/api/sweeps/{id}/points?format=csv"),
+        None,
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(
+        csv.starts_with("samples,failures,theta_r_n,theta_r_mean"),
+        "{csv}"
+    );
 }

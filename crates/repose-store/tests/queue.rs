@@ -3,31 +3,64 @@
 //! `CI=true` the PostgreSQL tests fail when the server is unreachable;
 //! elsewhere they say so and skip.
 
-use repose_physics::{run, Quiet, RunReport, Scene};
-use repose_store::spec::SweepSpec;
-use repose_store::{Lease, Store};
+use repose_store::{Lease, NewJob, NewSweep, ResultRecord, Store};
 use serde_json::json;
-use std::collections::HashSet;
+use std::collections::{BTreeMap, HashSet};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// A real (tiny) run report to store.
-fn report() -> RunReport {
-    let scene = Scene::from_toml(
-        "protocol = \"free_run\"\nduration = 0.001\n[[particles]]\nposition = [0.0, 0.0]\nradius = 0.1",
-        &[],
-    )
-    .unwrap();
-    run(&scene, &mut Quiet).unwrap()
+/// A result with the given metrics (the store reads nothing else of a report).
+fn record(outcome: &str, metrics: &[(&str, f64)]) -> ResultRecord {
+    ResultRecord {
+        engine: "test".into(),
+        seed: 0,
+        outcome: outcome.into(),
+        reason: (outcome != "completed").then(|| "flow: test".to_string()),
+        metrics: metrics
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect::<BTreeMap<_, _>>(),
+        grains_initial: 10,
+        grains_final: 8,
+        grains_lost: 2,
+        iterations: 100,
+        simulated_time: 0.1,
+        wall_time: 0.01,
+        particle_steps: 1000,
+        report: json!({"outcome": {"status": outcome}}).to_string(),
+    }
 }
 
-fn sweep(samples: u32, mus: &[f64]) -> SweepSpec {
-    serde_json::from_value(json!({
-        "protocol": "fill_release",
-        "axes": {"contact.mu": mus},
-        "samples": samples,
-    }))
-    .unwrap()
+fn report() -> ResultRecord {
+    record("completed", &[("theta_r", 20.0)])
+}
+
+/// A sweep over μ with `samples` seeds a point; a sample's identity is its
+/// μ and seed, so the same sample in two sweeps hashes alike.
+fn sweep(samples: u32, mus: &[f64]) -> (NewSweep, Vec<NewJob>) {
+    let jobs = mus
+        .iter()
+        .flat_map(|mu| {
+            (0..samples).map(move |k| NewJob {
+                point: json!({"contact.mu": mu}).as_object().cloned().unwrap(),
+                sample: k,
+                seed: k as u64,
+                sample_hash: format!("mu={mu}/seed={k}"),
+                scene: json!({"protocol": "fill_release", "seed": k, "contact": {"mu": mu}}),
+            })
+        })
+        .collect();
+    let spec = json!({"protocol": "fill_release", "axes": {"contact.mu": mus}, "samples": samples});
+    (
+        NewSweep {
+            name: "test".into(),
+            protocol: "fill_release".into(),
+            spec,
+            priority: 0,
+            study: None,
+        },
+        jobs,
+    )
 }
 
 async fn sqlite() -> Store {
@@ -86,8 +119,7 @@ where
 #[tokio::test(flavor = "multi_thread", worker_threads = 4)]
 async fn concurrent_workers_complete_every_job_exactly_once() {
     each_backend(|store| async move {
-        let spec = sweep(10, &[0.1, 0.2, 0.3, 0.4]);
-        let jobs = spec.expand().unwrap();
+        let (spec, jobs) = sweep(10, &[0.1, 0.2, 0.3, 0.4]);
         let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
         assert_eq!((created.jobs, created.reused), (40, 0));
         let report = report();
@@ -127,8 +159,7 @@ async fn concurrent_workers_complete_every_job_exactly_once() {
 #[tokio::test]
 async fn an_expired_lease_goes_back_to_the_queue_and_the_old_owner_cannot_complete() {
     each_backend(|store| async move {
-        let spec = sweep(1, &[0.2]);
-        let jobs = spec.expand().unwrap();
+        let (spec, jobs) = sweep(1, &[0.2]);
         store.create_sweep(&spec, &jobs, 2).await.unwrap();
         let first = store
             .claim("crashed", Duration::from_millis(1))
@@ -167,8 +198,7 @@ async fn an_expired_lease_goes_back_to_the_queue_and_the_old_owner_cannot_comple
 #[tokio::test]
 async fn a_job_out_of_attempts_is_failed_with_the_reason() {
     each_backend(|store| async move {
-        let spec = sweep(1, &[0.2]);
-        let jobs = spec.expand().unwrap();
+        let (spec, jobs) = sweep(1, &[0.2]);
         let created = store.create_sweep(&spec, &jobs, 2).await.unwrap();
         for _ in 0..2 {
             store
@@ -197,8 +227,7 @@ async fn a_job_out_of_attempts_is_failed_with_the_reason() {
 #[tokio::test]
 async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
     each_backend(|store| async move {
-        let spec = sweep(3, &[0.2]);
-        let jobs = spec.expand().unwrap();
+        let (spec, jobs) = sweep(3, &[0.2]);
         let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
         let running = store
             .claim("w", Duration::from_secs(60))
@@ -230,8 +259,7 @@ async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
 async fn a_sweep_reuses_samples_already_computed_and_priority_orders_claims() {
     each_backend(|store| async move {
         let report = report();
-        let first = sweep(2, &[0.2]);
-        let jobs = first.expand().unwrap();
+        let (first, jobs) = sweep(2, &[0.2]);
         store.create_sweep(&first, &jobs, 3).await.unwrap();
         while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
             store
@@ -240,19 +268,13 @@ async fn a_sweep_reuses_samples_already_computed_and_priority_orders_claims() {
                 .unwrap();
         }
         // The same two samples plus two new ones.
-        let again = sweep(4, &[0.2]);
-        let created = store
-            .create_sweep(&again, &again.expand().unwrap(), 3)
-            .await
-            .unwrap();
+        let (again, again_jobs) = sweep(4, &[0.2]);
+        let created = store.create_sweep(&again, &again_jobs, 3).await.unwrap();
         assert_eq!((created.jobs, created.reused), (4, 2));
         // A later sweep of higher priority is claimed first.
-        let mut urgent = sweep(1, &[0.3]);
+        let (mut urgent, urgent_jobs) = sweep(1, &[0.3]);
         urgent.priority = 10;
-        let u = store
-            .create_sweep(&urgent, &urgent.expand().unwrap(), 3)
-            .await
-            .unwrap();
+        let u = store.create_sweep(&urgent, &urgent_jobs, 3).await.unwrap();
         let c = store
             .claim("w", Duration::from_secs(60))
             .await
@@ -266,29 +288,26 @@ async fn a_sweep_reuses_samples_already_computed_and_priority_orders_claims() {
 #[tokio::test]
 async fn point_statistics_match_the_samples_they_summarise() {
     each_backend(|store| async move {
-        let spec = sweep(5, &[0.1, 0.3]);
-        let jobs = spec.expand().unwrap();
+        let (spec, jobs) = sweep(5, &[0.1, 0.3]);
         let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
-        let base = report();
         let mut k = 0.0;
         while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
-            let mut r = base.clone();
             k += 1.0;
             // Samples without a result come first and in the middle: NULL
-            // and non-NULL angles must bind in either order.
-            if k == 1.0 || k == 4.0 {
-                // one sample without a result: counted apart, no angle
-                r.outcome = repose_physics::Outcome::NotSettled {
-                    phase: "flow".into(),
-                    reason: "test".into(),
-                };
+            // and non-NULL reasons must bind in either order.
+            let r = if k == 1.0 || k == 4.0 {
+                // a sample without a result: counted apart, no metric
+                record("not_settled", &[])
             } else {
-                r.repose = Some(repose_physics::measure::SlopeAngles {
-                    endpoints: 30.0 - k,
-                    line_fit: 20.0 + 0.5 * k,
-                    cumulative_fit: 10.0 + k * k,
-                });
-            }
+                record(
+                    "completed",
+                    &[
+                        ("theta_r_endpoints", 30.0 - k),
+                        ("theta_r_line", 20.0 + 0.5 * k),
+                        ("theta_r", 10.0 + k * k),
+                    ],
+                )
+            };
             store
                 .complete(&c.job_id, "w", &c.sample_hash, &r)
                 .await
@@ -301,18 +320,28 @@ async fn point_statistics_match_the_samples_they_summarise() {
         for p in &points {
             let mine: Vec<&repose_store::Sample> =
                 samples.iter().filter(|s| s.point == p.point).collect();
-            let values: Vec<f64> = mine.iter().filter_map(|s| s.theta_r).collect();
-            let expected = repose_physics::measure::Stats::of(&values).unwrap();
+            let values: Vec<f64> = mine
+                .iter()
+                .filter_map(|s| s.metrics.get("theta_r").copied())
+                .collect();
+            let n = values.len() as f64;
+            let mean = values.iter().sum::<f64>() / n;
+            let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
             let got = p.metrics["theta_r"];
-            assert_eq!(got.n as usize, expected.n);
-            assert!((got.mean.unwrap() - expected.mean).abs() < 1e-9);
-            assert!((got.sd.unwrap() - expected.sd).abs() < 1e-9);
-            assert!((got.sem.unwrap() - expected.sem).abs() < 1e-9);
+            assert_eq!(got.n as usize, values.len());
+            assert!((got.mean.unwrap() - mean).abs() < 1e-9);
+            assert!((got.sd.unwrap() - sd).abs() < 1e-9);
+            assert!((got.sem.unwrap() - sd / n.sqrt()).abs() < 1e-9);
             assert_eq!(
                 p.failures as usize,
                 mine.iter().filter(|s| s.outcome != "completed").count()
             );
-            assert_eq!(p.metrics["theta_t"].n, 0);
+            // No sample measured θ_T: the point has no entry for it.
+            assert!(!p.metrics.contains_key("theta_t"));
+            // A sample without a result has no metrics at all.
+            for s in &mine {
+                assert_eq!(s.outcome == "completed", s.metrics.len() == 3, "{s:?}");
+            }
         }
         assert_eq!(points.iter().map(|p| p.failures).sum::<i64>(), 2);
         let s = repose_store::series(&points, "contact.mu", None, "theta_r").unwrap();

@@ -139,7 +139,7 @@ impl Figure {
         for layer in &self.layers {
             out.series.extend(self.layer(layer, study));
         }
-        let range = x_range(&out.series);
+        let range = x_range(&out.series).filter(|(lo, hi)| hi > lo);
         for layer in &self.layers {
             if let (Layer::Curve { label, f }, Some((lo, hi))) = (layer, range) {
                 out.series.push(curve(label, *f, lo, hi, self.log_x));
