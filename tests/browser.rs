@@ -1,6 +1,8 @@
 //! The results browser in a real headless Chromium against `repose serve`
-//! with a small finished sweep: the list shows it, a figure draws its points
-//! with error bars, a sample page draws its pile, and a bad form entry shows
+//! with small finished sweeps: the list shows them, every figure of the
+//! paper draws from the API's study data, a sweep draws as a paper's figure,
+//! a sample page draws its pile and its recorded curves, the buttons behind
+//! the paper's figures queue the study's sweeps, and a bad form entry shows
 //! the API's message beside the field. Screenshots go to
 //! `target/screenshots/`.
 //!
@@ -232,20 +234,6 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "samples": 1,
         "fidelity": "quick"
     });
-    let tilt = json!({
-        "protocol": "tilt",
-        "base": {"box": {"width": 2.0, "height": 2.0}},
-        "axes": {"contact.mu": [0.15, 0.3]},
-        "samples": 2,
-        "fidelity": "quick"
-    });
-    let widths = json!({
-        "protocol": "fill_release",
-        "base": {"box": {"aspect": 1.0}},
-        "axes": {"box.width": [1.5, 2.0], "contact.mu": [0.1, 0.3]},
-        "samples": 1,
-        "fidelity": "quick"
-    });
     // A forced step of 0.3 t_c: accepted, but every fill fails a guard.
     let coarse = json!({
         "protocol": "fill_release",
@@ -253,12 +241,11 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "samples": 1,
         "fidelity": "quick"
     });
-    let (id, hash, grains, flux_hash, tilt_id, widths_id, coarse_id) = rt.block_on(async {
+    let (id, hash, grains, flux_hash, coarse_id) = rt.block_on(async {
         let id = run_sweep(&server, &spec).await;
         let flux_id = run_sweep(&server, &flux).await;
-        let tilt_id = run_sweep(&server, &tilt).await;
-        let widths_id = run_sweep(&server, &widths).await;
         let coarse_id = run_sweep(&server, &coarse).await;
+        run_study(&server).await;
         let first_sample = |sweep: String| {
             let url = server.url.clone();
             async move {
@@ -273,7 +260,7 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         let report = get(&format!("{}/api/samples/{hash}", server.url)).await;
         let grains = report["final_state"]["grains"].as_array().unwrap().len() as u64;
         let flux_hash = first_sample(flux_id).await;
-        (id, hash, grains, flux_hash, tilt_id, widths_id, coarse_id)
+        (id, hash, grains, flux_hash, coarse_id)
     });
 
     let mut tab = Page::launch(&chrome);
@@ -310,41 +297,29 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     assert_eq!(count(&mut tab, "#samples tbody tr"), 4);
     tab.screenshot("sweep.png");
 
-    // 3. Figure 3 draws both points with error bars, every sample, and atan(3μ).
-    open(&mut tab, &format!("/sweep/{id}/figure/3"));
+    // 3. The sweep drawn as the paper's figure 3: both points with error
+    //    bars, every sample, and atan(3μ) from the API.
+    assert!(count(&mut tab, &format!("a[href='#/sweep/{id}/figure/lh93/3']")) == 1);
+    open(&mut tab, &format!("/sweep/{id}/figure/lh93/3"));
     wait_for(
         &mut tab,
         "the figure",
         "document.querySelectorAll('#figure-plot svg circle.mean').length === 2",
     );
-    assert_eq!(count(&mut tab, "#figure-plot svg g.errorbar"), 2);
+    assert_eq!(count(&mut tab, "#figure-plot svg g.errorbar"), 3);
     assert_eq!(count(&mut tab, "#figure-plot svg circle.sample"), 4);
     assert_eq!(count(&mut tab, "#figure-plot svg polyline.theory"), 1);
+    assert_eq!(count(&mut tab, "#figure-plot svg circle.quoted"), 1);
     let title = wait_for(
         &mut tab,
         "a hover text",
         "document.querySelector('#figure-plot circle.mean title').textContent",
     );
     assert!(title.as_str().unwrap().contains("n = 2"), "{title}");
-    tab.screenshot("figure3.png");
+    tab.screenshot("sweep-as-figure3.png");
 
-    // Figure 4 (θ_T) with eq. (4) from the same piles, and figure 2b with one series per μ.
-    open(&mut tab, &format!("/sweep/{tilt_id}/figure/4"));
-    wait_for(
-        &mut tab,
-        "figure 4",
-        "document.querySelectorAll('#figure-plot svg circle.mean').length === 2",
-    );
-    assert_eq!(count(&mut tab, "#figure-plot svg polyline.theory"), 1);
-    tab.screenshot("figure4.png");
-    open(&mut tab, &format!("/sweep/{widths_id}/figure/2b"));
-    wait_for(
-        &mut tab,
-        "figure 2b",
-        "document.querySelectorAll('#figure-plot svg circle.mean').length === 4",
-    );
-    assert_eq!(count(&mut tab, "#figure-plot svg g.series"), 2);
-    tab.screenshot("figure2b.png");
+    // Every figure of the paper, drawn from the study data the API serves.
+    paper_figures(&mut tab, &mut open);
 
     // 4. A sample page draws every grain, force chains, the surface and the energy trace.
     open(&mut tab, &format!("/sample/{hash}"));
@@ -373,9 +348,9 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     wait_for(
         &mut tab,
         "the flux series",
-        "document.querySelector('#flux svg polyline.trace')",
+        "document.querySelector('#series-pile_angle svg polyline.trace')",
     );
-    assert_eq!(count(&mut tab, "#flux svg rect.band"), 1);
+    assert_eq!(count(&mut tab, "#series-pile_angle svg rect.band"), 1);
     tab.screenshot("flux.png");
 
     // 6. A bad value in the form: the API's message appears beside the axis.
@@ -457,4 +432,118 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "{reason} / {shown}"
     );
     tab.screenshot("failed-sample.png");
+
+    // 10. The button behind figure 3 queues the study's sweep, the one
+    //     `repose reproduce` queues.
+    open(&mut tab, "/new");
+    wait_for(
+        &mut tab,
+        "the study buttons",
+        "document.querySelector('button[data-study=\"lh93/fig347\"]')",
+    );
+    tab.evaluate("document.querySelector('button[data-study=\"lh93/fig347\"]').click()");
+    let queued = wait_for(
+        &mut tab,
+        "the queued study sweep",
+        "location.hash.startsWith('#/sweep/') && location.hash.slice(8)",
+    );
+    let queued = queued.as_str().unwrap().to_string();
+    rt.block_on(async {
+        let sweep = get(&format!("{}/api/sweeps/{queued}", server.url)).await;
+        assert_eq!(sweep["study"], "lh93/fig347");
+        assert_eq!(sweep["spec"]["samples"], 20);
+        assert_eq!(sweep["spec"]["fidelity"], "standard");
+        // The paper's sweep is long: stop it.
+        reqwest::Client::new()
+            .post(format!("{}/api/sweeps/{queued}/cancel", server.url))
+            .send()
+            .await
+            .unwrap();
+    });
+}
+
+/// Queues every sweep of the paper's study (small, quick) and waits for them.
+async fn run_study(server: &Server) {
+    let client = reqwest::Client::new();
+    let study = get(&format!("{}/api/studies/lh93", server.url)).await;
+    let mut ids = Vec::new();
+    for sweep in study["sweeps"].as_array().unwrap() {
+        let key = sweep["key"].as_str().unwrap();
+        let created: Value = client
+            .post(format!("{}/api/studies/lh93/sweeps/{key}", server.url))
+            .json(&json!({"fidelity": "quick", "reduced": true, "samples": 2}))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        ids.push(created["id"].as_str().unwrap().to_string());
+    }
+    for id in ids {
+        common::wait_until(
+            &format!("{}/api/sweeps/{id}", server.url),
+            "a study sweep",
+            Duration::from_secs(300),
+            common::finished,
+        )
+        .await;
+    }
+}
+
+/// Opens every figure of the paper and checks what it draws: means where it
+/// measures, theory curves and quoted values where the study has them.
+fn paper_figures(tab: &mut Page, open: &mut impl FnMut(&mut Page, &str)) {
+    open(tab, "/papers");
+    wait_for(
+        tab,
+        "the papers",
+        "document.querySelector('[data-paper=\"lh93\"] ul li a')",
+    );
+    let figures = tab.evaluate(
+        "Array.from(document.querySelectorAll('[data-paper=\"lh93\"] ul li a')).map(a => a.getAttribute('href'))",
+    );
+    let figures: Vec<String> = serde_json::from_value(figures).unwrap();
+    assert_eq!(figures.len(), 9, "{figures:?}");
+    // (figure, means drawn, theory curves, quoted values)
+    let expected = [
+        ("2a", 2, 0, 0),
+        ("2b", 4, 0, 0),
+        ("3", 3, 1, 1),
+        ("4", 3, 1, 0),
+        ("5", 0, 0, 0),
+        ("7a", 3, 1, 0),
+        ("7b", 3, 1, 0),
+        ("k_n", 2, 0, 3),
+        ("gamma_n", 2, 0, 3),
+    ];
+    for (fig, means, theory, quoted) in expected {
+        open(tab, &format!("/paper/lh93/figure/{fig}"));
+        wait_for(
+            tab,
+            &format!("figure {fig}"),
+            "document.querySelector('#figure-plot svg') && document.querySelectorAll('#figure-plot svg .series').length",
+        );
+        assert_eq!(
+            count(tab, "#figure-plot svg circle.mean"),
+            means,
+            "figure {fig}"
+        );
+        assert_eq!(
+            count(tab, "#figure-plot svg polyline.theory"),
+            theory,
+            "figure {fig}"
+        );
+        assert_eq!(
+            count(tab, "#figure-plot svg circle.quoted"),
+            quoted,
+            "figure {fig}"
+        );
+        if fig == "5" {
+            assert_eq!(count(tab, "#figure-plot svg polyline.trace"), 1);
+            assert_eq!(count(tab, "#figure-plot svg polyline.level"), 1);
+            assert_eq!(count(tab, "#figure-plot svg rect.band"), 1);
+        }
+        tab.screenshot(&format!("paper-figure-{fig}.png"));
+    }
 }

@@ -1,42 +1,42 @@
-// The results browser: sweeps, the submit form with the paper's presets,
-// figures with error bars, and single piles. Plain JavaScript, no build step;
-// everything comes from the service's own API.
+// The results browser: sweeps, the submit form, the papers' figures, and
+// single samples. Plain JavaScript, no build step. Everything comes from the
+// service's own API: the protocols and their metrics (/api/protocols), the
+// papers' studies and figures with their theory curves (/api/studies), and
+// the stored sweeps. The page holds no physics and no list of metrics.
 "use strict";
 
-const { errorBarPlot, linePlot, pilePlot, svgText, download, downloadPng, theory, fmt } = window.plots;
+const { figurePlot, linePlot, pilePlot, svgText, download, downloadPng, fmt } = window.plots;
 const view = document.getElementById("view");
 let timer = null;
 
-const METRIC_LABELS = {
-  theta_r: "θ_R, method 3 (°)",
-  theta_r_line: "θ_R, method 2 (°)",
-  theta_r_endpoints: "θ_R, method 1 (°)",
-  theta_t: "θ_T (°)",
-  theta_ms_mean: "steady pile angle, flux (°)",
-  theta_ms_max: "largest pile angle, flux (°)",
-};
-const AXIS_LABELS = {
-  "contact.mu": "friction coefficient μ",
-  "box.width": "box width W (cm)",
-  "box.height": "box height H (cm)",
-  "contact.k_n": "k_n (dyn/cm^1.5)",
-  "contact.gamma_n": "γ_n (1/s)",
-};
-const axisLabel = k => AXIS_LABELS[k] || k;
+// ---------------------------------------------------------------- registry
+// Protocols and studies, fetched once.
+const registry = { protocols: new Map(), studies: [], loaded: null };
 
-// The sweeps behind the paper's figures, queued as they are (20 samples a point).
-const PRESETS = [
-  { label: "Figure 2a: θ_R against H", spec: { name: "Figure 2a: θ_R against H (W = 2, μ = 0.2)", protocol: "fill_release",
-      base: { box: { width: 2.0 }, contact: { mu: 0.2 } }, axes: { "box.height": [2, 3, 4, 5, 6, 7, 8] }, samples: 20, fidelity: "standard" } },
-  { label: "Figure 2b: θ_R against W", spec: { name: "Figure 2b: θ_R against W, H/W = 2", protocol: "fill_release",
-      base: { box: { aspect: 2.0 } }, axes: { "box.width": [1.5, 2, 2.5, 3, 3.5, 4], "contact.mu": [0.1, 0.2, 0.3] }, samples: 20, fidelity: "standard" } },
-  { label: "Figure 3: θ_R against μ", spec: { name: "Figure 3: θ_R against μ (W = H = 4)", protocol: "fill_release",
-      base: { box: { width: 4.0, height: 4.0 } }, axes: { "contact.mu": [0.0, 0.05, 0.1, 0.15, 0.2] }, samples: 20, fidelity: "standard" } },
-  { label: "Figure 4: θ_T against μ", spec: { name: "Figure 4: θ_T against μ (W = H = 4)", protocol: "tilt",
-      base: { box: { width: 4.0, height: 4.0 } }, axes: { "contact.mu": [0.05, 0.1, 0.15, 0.2] }, samples: 20, fidelity: "standard" } },
-  { label: "Figure 5: constant flux", spec: { name: "Figure 5: constant flux (μ = 0.2, W = 4)", protocol: "flux",
-      base: { box: { width: 4.0 }, contact: { mu: 0.2 }, flux: { v_cut: 0.1, insertions: 400 } }, samples: 1, fidelity: "standard" } },
-];
+function loadRegistry() {
+  if (!registry.loaded) {
+    registry.loaded = Promise.all([api("/api/protocols"), api("/api/studies")]).then(([p, s]) => {
+      for (const proto of (p.body && p.body.protocols) || []) registry.protocols.set(proto.name, proto);
+      registry.studies = (s.body && s.body.studies) || [];
+    });
+  }
+  return registry.loaded;
+}
+
+// The metrics a protocol declares, headline first.
+function metricsOf(protocol) {
+  const p = registry.protocols.get(protocol);
+  return p ? p.metrics : [];
+}
+
+// A metric's label with its unit, e.g. "θ_R (°)".
+function metricLabel(name) {
+  for (const p of registry.protocols.values()) {
+    const m = p.metrics.find(m => m.name === name);
+    if (m) return m.unit ? `${m.label} (${m.unit})` : m.label;
+  }
+  return name;
+}
 
 async function api(path, options = {}) {
   const resp = await fetch(path, { headers: { "content-type": "application/json" }, ...options });
@@ -76,6 +76,8 @@ function counts(p) {
   return `${p.done} done · ${p.running} running · ${p.queued} queued · ${p.failed} errored` + (p.cancelled ? ` · ${p.cancelled} cancelled` : "");
 }
 
+function unfinished(p) { return p.queued + p.running > 0; }
+
 // A sweep's state as a user reads it: an active sweep with nothing left to run has finished.
 function stateTag(s) {
   const label = s.state === "active" ? (unfinished(s.progress) ? "running" : "finished") : s.state;
@@ -96,12 +98,15 @@ function axesSummary(spec) {
   return axes.map(([k, v]) => `${k} ∈ {${v.join(", ")}}`).join(" × ");
 }
 
-function unfinished(p) { return p.queued + p.running > 0; }
-
 async function cancel(id, after) {
   const r = await api(`/api/sweeps/${id}/cancel`, { method: "POST" });
   if (!r.ok) alert(r.body ? r.body.error : "cancel failed");
   after();
+}
+
+// Queues the sweep behind a paper's figures: the same sweep `repose reproduce` queues.
+async function queueStudySweep(paper, key, body = {}) {
+  return api(`/api/studies/${paper}/sweeps/${key}`, { method: "POST", body: JSON.stringify(body) });
 }
 
 // ---------------------------------------------------------------- sweeps
@@ -110,7 +115,7 @@ async function sweepsView() {
   const body = h("div", {},
     h("h1", {}, "Sweeps"),
     h("p", { class: "muted" }, "Every sweep of this study, newest first; the list refreshes while workers run. ",
-      h("a", { href: "#/new" }, "Queue a sweep"), " or one of the paper's figures."),
+      h("a", { href: "#/new" }, "Queue a sweep"), " or ", h("a", { href: "#/papers" }, "one behind a paper's figures"), "."),
     h("div", { class: "panel" }, h("table", { id: "sweeps" },
       h("thead", {}, h("tr", {}, h("th", {}, "Name"), h("th", {}, "Protocol"), h("th", {}, "Axes"), h("th", {}, "Samples"),
         h("th", {}, "Progress"), h("th", {}, "ETA"), h("th", {}, "State"), h("th", {}, ""))),
@@ -155,11 +160,42 @@ async function submitSpec(spec) {
   return api("/api/sweeps", { method: "POST", body: JSON.stringify(spec) });
 }
 
-function newView() {
+// Shows an API error answer beside the fields it names.
+function errorShower(err, axesBox, general) {
+  return body => {
+    const errors = (body && body.errors) || [];
+    if (!errors.length) general.textContent = (body && body.error) || "The server refused the sweep.";
+    for (const e of errors) {
+      const f = e.field || "";
+      const msg = `${f}: ${e.message}`;
+      if (f.startsWith("axes.")) {
+        const row = [...axesBox.children].find(r => f === `axes.${r.axis.k.value.trim()}` || f.startsWith(`axes.${r.axis.k.value.trim()}.`));
+        if (row) { row.axis.e.textContent = msg; continue; }
+      }
+      if (f.startsWith("base")) { err.base.textContent = msg; continue; }
+      const top = f.split(/[.[]/)[0];
+      if (err[top]) { err[top].textContent = msg; continue; }
+      general.textContent += (general.textContent ? "\n" : "") + msg;
+    }
+  };
+}
+
+// The papers' study sweeps as one-click buttons.
+function studyButtons(onError) {
+  return registry.studies.map(st => h("div", {},
+    h("h3", {}, st.title),
+    h("div", { class: "presets" }, ...st.sweeps.map(sw => h("button", { type: "button", class: "secondary", "data-study": `${st.key}/${sw.key}`, onclick: async () => {
+      const r = await queueStudySweep(st.key, sw.key);
+      if (r.ok) location.hash = `#/sweep/${r.body.id}`; else onError(r.body);
+    } }, sw.title)))));
+}
+
+async function newView() {
+  await loadRegistry();
   const err = {};
   const errBox = name => (err[name] = h("div", { class: "field-error", id: `err-${name.replace(/[^\w]/g, "-")}`, role: "alert" }));
   const name = h("input", { type: "text", id: "f-name", placeholder: "optional" });
-  const protocol = h("select", { id: "f-protocol" }, ...["fill_release", "tilt", "flux"].map(p => h("option", { value: p }, p)));
+  const protocol = h("select", { id: "f-protocol" }, ...[...registry.protocols.values()].map(p => h("option", { value: p.name, title: p.about }, p.name)));
   const base = h("textarea", { id: "f-base", rows: 4, "aria-describedby": "err-base" });
   base.value = JSON.stringify({ box: { width: 4.0, height: 4.0 } });
   const samples = h("input", { type: "number", id: "f-samples", value: 10, min: 1, "aria-describedby": "err-samples" });
@@ -177,6 +213,7 @@ function newView() {
   };
   addAxis("contact.mu", "0.1, 0.2, 0.3");
   const general = h("div", { class: "field-error", role: "alert", id: "err-general" });
+  const showErrors = errorShower(err, axesBox, general);
 
   const collect = () => {
     for (const e of Object.values(err)) e.textContent = "";
@@ -198,23 +235,6 @@ function newView() {
     return spec;
   };
 
-  const showErrors = body => {
-    const errors = (body && body.errors) || [];
-    if (!errors.length) general.textContent = (body && body.error) || "The server refused the sweep.";
-    for (const e of errors) {
-      const f = e.field || "";
-      const msg = `${f}: ${e.message}`;
-      if (f.startsWith("axes.")) {
-        const row = [...axesBox.children].find(r => f === `axes.${r.axis.k.value.trim()}` || f.startsWith(`axes.${r.axis.k.value.trim()}.`));
-        if (row) { row.axis.e.textContent = msg; continue; }
-      }
-      if (f.startsWith("base")) { err.base.textContent = msg; continue; }
-      const top = f.split(/[.[]/)[0];
-      if (err[top]) { err[top].textContent = msg; continue; }
-      general.textContent += (general.textContent ? "\n" : "") + msg;
-    }
-  };
-
   const onSubmit = async ev => {
     ev.preventDefault();
     const spec = collect();
@@ -224,17 +244,13 @@ function newView() {
     else showErrors(r.body);
   };
 
-  const presetButtons = PRESETS.map(p => h("button", { type: "button", class: "secondary", onclick: async () => {
-    const r = await submitSpec(p.spec);
-    if (r.ok) location.hash = `#/sweep/${r.body.id}`; else showErrors(r.body);
-  } }, p.label));
-
   setView(
     h("h1", {}, "New sweep"),
     h("div", { class: "panel" },
-      h("h2", {}, "The paper's figures"),
-      h("p", { class: "muted" }, "One click queues the sweep behind a figure of Lee & Herrmann (1993), 20 samples a point."),
-      h("div", { class: "presets" }, ...presetButtons)),
+      h("h2", {}, "The papers' figures"),
+      h("p", { class: "muted" }, "One click queues the sweep behind a paper's figures, at the paper's number of samples and the standard fidelity — the same sweep `repose reproduce` queues. ",
+        h("a", { href: "#/papers" }, "See the figures"), "."),
+      ...studyButtons(showErrors)),
     h("form", { class: "panel", onsubmit: onSubmit, id: "sweep-form", novalidate: true },
       h("h2", {}, "Your own"),
       h("div", { class: "form-grid" },
@@ -252,62 +268,77 @@ function newView() {
 }
 
 // ---------------------------------------------------------------- one sweep
-function figureFor(spec) {
-  const axes = Object.keys(spec.axes || {});
-  const out = [];
-  if (axes.includes("box.height")) out.push("2a");
-  if (axes.includes("box.width") && axes.includes("contact.mu")) out.push("2b");
-  if (axes.includes("contact.mu") && spec.protocol !== "tilt") out.push("3");
-  if (axes.includes("contact.mu") && spec.protocol === "tilt") out.push("4");
-  return out;
+// A sweep's points as figure data: one metric along an axis, one series per
+// value of another, with every sample.
+function genericFigure(points, samples, chosen) {
+  const key = v => JSON.stringify(v);
+  const groups = new Map();
+  for (const p of points) {
+    const s = chosen.series ? p.point[chosen.series] : null;
+    if (!groups.has(key(s))) groups.set(key(s), { name: chosen.series ? `${chosen.series} = ${s}` : "", kind: "measured", value: s, points: [] });
+    const m = p.metrics[chosen.y] || {};
+    const vals = samples.filter(q => key(q.point) === key(p.point)).map(q => q.metrics[chosen.y]).filter(Number.isFinite);
+    groups.get(key(s)).points.push({ x: p.point[chosen.x], y: m.mean, sd: m.sd, sem: m.sem, n: m.n, failures: p.failures, samples: vals });
+  }
+  const series = [...groups.values()].map(g => ({ ...g, points: g.points.sort((a, b) => a.x - b.x) }))
+    .sort((a, b) => (a.value ?? 0) - (b.value ?? 0));
+  return { series, x_label: chosen.x, y_label: metricLabel(chosen.y), log_x: false };
+}
+
+function plotControls(axes, metrics, chosen, redraw, figures, id) {
+  const sel = (sid, options, value, onchange, label) => h("label", {}, label + " ",
+    h("select", { id: sid, onchange }, ...options.map(([v, t]) => h("option", { value: v, selected: v === value }, t))));
+  return h("div", { class: "controls" },
+    sel("plot-x", axes.map(a => [a, a]), chosen.x, e => { chosen.x = e.target.value; redraw(); }, "x"),
+    sel("plot-series", [["", "none"], ...axes.filter(a => a !== chosen.x).map(a => [a, a])], chosen.series, e => { chosen.series = e.target.value; redraw(); }, "series"),
+    sel("plot-y", metrics.map(m => [m.name, metricLabel(m.name)]), chosen.y, e => { chosen.y = e.target.value; redraw(); }, "y"),
+    sel("plot-errors", [["sd", "error bars: sd"], ["sem", "error bars: sem"]], chosen.errors, e => { chosen.errors = e.target.value; redraw(); }, ""),
+    ...figures.map(f => h("a", { class: "button secondary", href: `#/sweep/${id}/figure/${f.paper}/${f.figure}` }, `${f.paper} figure ${f.figure}`)));
+}
+
+function pointsTable(points, metrics) {
+  const cols = metrics.filter(m => points.some(q => q.metrics[m.name] && q.metrics[m.name].n > 0));
+  return h("div", { class: "panel" }, h("table", { id: "points" },
+    h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "n"), h("th", { class: "num" }, "no result"),
+      ...cols.map(m => h("th", { class: "num" }, `${metricLabel(m.name)} mean ± sd (sem)`)))),
+    h("tbody", {}, ...points.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.samples)),
+      h("td", { class: "num" }, String(q.failures)),
+      ...cols.map(m => { const a = q.metrics[m.name] || {}; return h("td", { class: "num" }, a.n ? `${fmt(a.mean)} ± ${fmt(a.sd)} (${fmt(a.sem)})` : "–"); }))))));
+}
+
+function samplesTable(samples, metrics) {
+  const cols = metrics.slice(0, 2);
+  return h("div", { class: "panel" }, h("table", { id: "samples" },
+    h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "Seed"), h("th", {}, "Outcome"),
+      ...cols.map(m => h("th", { class: "num" }, metricLabel(m.name))), h("th", { class: "num" }, "grains"), h("th", { class: "num" }, "wall s"))),
+    h("tbody", {}, ...samples.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.seed)),
+      h("td", {}, h("a", { href: `#/sample/${q.sample_hash}` }, h("span", { class: `tag ${q.outcome}` }, q.outcome)),
+        q.reason ? h("div", { class: "reason muted" }, q.reason) : ""),
+      ...cols.map(m => h("td", { class: "num" }, fmt(q.metrics[m.name]))),
+      h("td", { class: "num" }, `${q.grains_initial}→${q.grains_final}`), h("td", { class: "num" }, fmt(q.wall_time, 2)))))));
 }
 
 async function sweepView(id) {
-  const head = h("div");
-  const plotBox = h("div");
-  const pointsBox = h("div");
-  const samplesBox = h("div");
+  await loadRegistry();
+  const head = h("div"), plotBox = h("div"), pointsBox = h("div"), samplesBox = h("div");
   setView(head, plotBox, pointsBox, samplesBox);
   let chosen = null;
+  const figs = await api(`/api/sweeps/${id}/figures`);
+  const figures = (figs.ok && figs.body.figures) || [];
 
-  const draw = async (sweep, points, samples) => {
+  const draw = (sweep, points, samples) => {
     const axes = Object.keys(sweep.spec.axes || {});
     if (!axes.length) {
       plotBox.replaceChildren(h("p", { class: "muted" }, "This sweep has no axes: see its samples below."));
       return;
     }
-    const metrics = Object.keys(METRIC_LABELS).filter(m => points.some(p => p.metrics[m] && p.metrics[m].n > 0));
-    if (!chosen) chosen = { x: axes[0], series: axes[1] || "", y: metrics[0] || "theta_r", errors: "sd" };
-    const sel = (id, options, value, onchange, label) => h("label", {}, label + " ",
-      h("select", { id, onchange }, ...options.map(([v, t]) => h("option", { value: v, selected: v === value }, t))));
-    const controls = h("div", { class: "controls" },
-      sel("plot-x", axes.map(a => [a, a]), chosen.x, e => { chosen.x = e.target.value; redraw(); }, "x"),
-      sel("plot-series", [["", "none"], ...axes.filter(a => a !== chosen.x).map(a => [a, a])], chosen.series, e => { chosen.series = e.target.value; redraw(); }, "series"),
-      sel("plot-y", (metrics.length ? metrics : ["theta_r"]).map(m => [m, METRIC_LABELS[m]]), chosen.y, e => { chosen.y = e.target.value; redraw(); }, "y"),
-      sel("plot-errors", [["sd", "error bars: sd"], ["sem", "error bars: sem"]], chosen.errors, e => { chosen.errors = e.target.value; redraw(); }, ""),
-      ...figureFor(sweep.spec).map(f => h("a", { class: "button secondary", href: `#/sweep/${id}/figure/${f}` }, `Figure ${f}`)));
+    const metrics = metricsOf(sweep.protocol);
+    if (!chosen) chosen = { x: axes[0], series: axes[1] || "", y: metrics.length ? metrics[0].name : "", errors: "sd" };
     const figBox = h("div", { class: "figure", id: "generic-plot" });
-    const redraw = () => {
-      const key = v => JSON.stringify(v);
-      const groups = new Map();
-      for (const p of points) {
-        const s = chosen.series ? p.point[chosen.series] : null;
-        if (!groups.has(key(s))) groups.set(key(s), { name: chosen.series ? `${chosen.series} = ${s}` : "", value: s, points: [], samples: [] });
-        const m = p.metrics[chosen.y] || {};
-        groups.get(key(s)).points.push({ x: p.point[chosen.x], mean: m.mean, sd: m.sd, sem: m.sem, n: m.n, failures: p.failures });
-      }
-      for (const smp of samples) {
-        const s = chosen.series ? smp.point[chosen.series] : null;
-        const g = groups.get(key(s));
-        if (g) g.samples.push({ x: smp.point[chosen.x], y: smp[chosen.y] });
-      }
-      const series = [...groups.values()].map(g => ({ ...g, points: g.points.sort((a, b) => a.x - b.x) }))
-        .sort((a, b) => (a.value ?? 0) - (b.value ?? 0));
-      const svg = errorBarPlot({ series, errors: chosen.errors, xLabel: axisLabel(chosen.x), yLabel: METRIC_LABELS[chosen.y] });
-      figBox.replaceChildren(svg);
-    };
+    const redraw = () => figBox.replaceChildren(figurePlot({ fig: genericFigure(points, samples, chosen), errors: chosen.errors }));
     redraw();
-    plotBox.replaceChildren(h("h2", {}, "Plot"), controls, figBox, downloads(() => figBox.querySelector("svg"), `sweep-${id}`, id));
+    plotBox.replaceChildren(h("h2", {}, "Plot"), plotControls(axes, metrics, chosen, redraw, figures, id), figBox,
+      downloads(() => figBox.querySelector("svg"), `sweep-${id}`, id));
   };
 
   const refresh = async () => {
@@ -318,26 +349,15 @@ async function sweepView(id) {
       h("h1", {}, sweep.name),
       h("div", { class: "panel" },
         h("p", {}, stateTag(sweep), " ", sweep.protocol, " · ", axesSummary(sweep.spec),
-          " · ", `${sweep.spec.samples || 1} samples a point · fidelity ${sweep.spec.fidelity || "standard"}`),
+          " · ", `${sweep.spec.samples || 1} samples a point · fidelity ${sweep.spec.fidelity || "standard"}`,
+          sweep.study ? ` · queued for ${sweep.study}` : ""),
         h("div", { class: "controls" }, progressBar(sweep.progress), h("span", {}, counts(sweep.progress)), h("span", {}, `ETA ${eta(sweep.eta_seconds)}`),
           sweep.state === "active" && unfinished(sweep.progress) ? h("button", { class: "danger", onclick: () => cancel(id, refresh) }, "Cancel sweep") : "")));
     const points = p.body.points, samples = smp.body.samples;
-    await draw(sweep, points, samples);
-    const metricCols = Object.keys(METRIC_LABELS).filter(m => points.some(q => q.metrics[m] && q.metrics[m].n > 0));
-    pointsBox.replaceChildren(h("h2", {}, "Points"), h("div", { class: "panel" }, h("table", { id: "points" },
-      h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "n"), h("th", { class: "num" }, "no result"),
-        ...metricCols.map(m => h("th", { class: "num" }, `${METRIC_LABELS[m]} mean ± sd (sem)`)))),
-      h("tbody", {}, ...points.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.samples)),
-        h("td", { class: "num" }, String(q.failures)),
-        ...metricCols.map(m => { const a = q.metrics[m]; return h("td", { class: "num" }, a.n ? `${fmt(a.mean)} ± ${fmt(a.sd)} (${fmt(a.sem)})` : "–"); })))))));
-    samplesBox.replaceChildren(h("h2", {}, `Samples (${samples.length})`), h("div", { class: "panel" }, h("table", { id: "samples" },
-      h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "Seed"), h("th", {}, "Outcome"),
-        h("th", { class: "num" }, "θ_R (m3)"), h("th", { class: "num" }, "θ_T"), h("th", { class: "num" }, "grains"), h("th", { class: "num" }, "wall s"))),
-      h("tbody", {}, ...samples.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.seed)),
-        h("td", {}, h("a", { href: `#/sample/${q.sample_hash}` }, h("span", { class: `tag ${q.outcome}` }, q.outcome)),
-          q.reason ? h("div", { class: "reason muted" }, q.reason) : ""),
-        h("td", { class: "num" }, fmt(q.theta_r)), h("td", { class: "num" }, fmt(q.theta_t)),
-        h("td", { class: "num" }, `${q.grains_initial}→${q.grains_final}`), h("td", { class: "num" }, fmt(q.wall_time, 2))))))));
+    draw(sweep, points, samples);
+    const metrics = metricsOf(sweep.protocol);
+    pointsBox.replaceChildren(h("h2", {}, "Points"), pointsTable(points, metrics));
+    samplesBox.replaceChildren(h("h2", {}, `Samples (${samples.length})`), samplesTable(samples, metrics));
     if (!unfinished(sweep.progress)) clearInterval(timer);
   };
   await refresh();
@@ -352,47 +372,55 @@ function downloads(getSvg, name, sweepId) {
     sweepId ? h("a", { class: "button secondary", href: `/api/sweeps/${sweepId}/samples?format=csv` }, "Samples CSV") : "");
 }
 
-// ---------------------------------------------------------------- paper figures
-async function figureView(id, name) {
-  const [f, smp, p] = await Promise.all([api(`/api/sweeps/${id}/figures/${name}`), api(`/api/sweeps/${id}/samples`), api(`/api/sweeps/${id}/points`)]);
-  if (!f.ok) { setView(h("h1", {}, `Figure ${name}`), h("p", { class: "error", role: "alert" }, f.body ? f.body.error : "not available")); return; }
-  const fig = f.body, samples = smp.body.samples, points = p.body.points;
+// ---------------------------------------------------------------- figures
+// A figure as the API serves it, with a choice of error bars.
+function figurePanel(fig, name, sweepId) {
   let errors = "sd";
   const box = h("div", { class: "figure", id: "figure-plot" });
-  const draw = () => {
-    const groups = new Map();
-    for (const q of fig.points) {
-      const k = JSON.stringify(q.series);
-      if (!groups.has(k)) groups.set(k, { name: fig.series ? `${fig.series} = ${q.series}` : "", value: q.series, points: [], samples: [] });
-      groups.get(k).points.push(q);
-    }
-    for (const s of samples) {
-      const k = JSON.stringify(fig.series ? s.point[fig.series] : null);
-      if (groups.has(k)) groups.get(k).samples.push({ x: s.point[fig.x], y: s[fig.y] });
-    }
-    const theoryCurves = [];
-    if (fig.x === "contact.mu" && fig.y === "theta_r") {
-      const xs = fig.points.map(q => q.x), lo = Math.min(...xs), hi = Math.max(...xs);
-      const pts = [];
-      for (let k = 0; k <= 50; k++) { const mu = lo + (hi - lo) * k / 50; pts.push({ x: mu, y: theory.marginal(mu) }); }
-      theoryCurves.push({ name: "θ_MS = atan(3μ), eq. (3)", points: pts });
-    }
-    if (fig.y === "theta_t") {
-      // eq. (4) with the measured θ_R of the same tilted piles
-      const pts = points.map(q => ({ x: q.point["contact.mu"], y: theory.tilting(q.point["contact.mu"], q.metrics.theta_r.mean) }))
-        .filter(q => Number.isFinite(q.y)).sort((a, b) => a.x - b.x);
-      if (pts.length) theoryCurves.push({ name: "θ_T from eq. (4) with measured θ_R", points: pts });
-    }
-    box.replaceChildren(errorBarPlot({ series: [...groups.values()], theory: theoryCurves, errors,
-      xLabel: axisLabel(fig.x), yLabel: METRIC_LABELS[fig.y], title: `Figure ${fig.figure}: ${fig.title}`, yFloor: 0 }));
-  };
+  const draw = () => box.replaceChildren(figurePlot({ fig, errors, title: `Figure ${fig.figure}: ${fig.title}` }));
   draw();
   const errSel = h("select", { id: "figure-errors", onchange: e => { errors = e.target.value; draw(); } },
     h("option", { value: "sd" }, "error bars: sample sd (the paper's)"), h("option", { value: "sem" }, "error bars: standard error"));
+  return h("div", {}, h("div", { class: "controls" }, errSel), box, h("p", { class: "muted" }, fig.caption),
+    downloads(() => box.querySelector("svg"), name, sweepId),
+    h("p", { class: "muted" }, "Large dots: mean over samples, with error bars; faint dots: single samples; open circles: the paper's quoted values; dashed: theory, evaluated by the service. Hover or focus a point for its numbers."));
+}
+
+// One sweep drawn as a paper's figure.
+async function sweepFigureView(id, paper, figure) {
+  const f = await api(`/api/sweeps/${id}/figures/${paper}/${figure}`);
+  if (!f.ok) { setView(h("h1", {}, `Figure ${figure}`), h("p", { class: "error", role: "alert" }, f.body ? f.body.error : "not available")); return; }
   setView(h("p", {}, h("a", { href: `#/sweep/${id}` }, "← back to the sweep")),
-    h("h1", {}, `Figure ${fig.figure}`), h("div", { class: "controls" }, errSel), box,
-    downloads(() => box.querySelector("svg"), `figure-${fig.figure}`, id),
-    h("p", { class: "muted" }, "Large dots: mean over samples, with error bars; faint dots: single samples. Hover or focus a mean for n, mean and sd."));
+    h("h1", {}, `${paper} figure ${f.body.figure}`), figurePanel(f.body, `${paper}-figure-${figure}`, id));
+}
+
+// The papers and their figures.
+async function papersView() {
+  await loadRegistry();
+  setView(h("h1", {}, "Papers"),
+    ...registry.studies.map(st => h("section", { class: "panel", "data-paper": st.key },
+      h("h2", {}, st.title), h("p", { class: "muted" }, st.citation),
+      h("ul", { class: "figures" }, ...st.figures.map(f => h("li", {},
+        h("a", { href: `#/paper/${st.key}/figure/${f.key}` }, `Figure ${f.key}: ${f.title}`),
+        h("span", { class: "muted" }, ` — from ${f.sweeps.join(", ")}`)))))));
+}
+
+// A paper's figure from the newest sweeps queued for it, with buttons to
+// queue the sweeps it still lacks.
+async function paperFigureView(paper, figure) {
+  await loadRegistry();
+  const f = await api(`/api/studies/${paper}/figures/${figure}`);
+  if (!f.ok) { setView(h("h1", {}, `Figure ${figure}`), h("p", { class: "error", role: "alert" }, f.body ? f.body.error : "not available")); return; }
+  const fig = f.body;
+  const study = registry.studies.find(s => s.key === paper);
+  const titleOf = key => ((study && study.sweeps.find(s => s.key === key)) || { title: key }).title;
+  const from = Object.entries(fig.sweeps).map(([key, id]) => h("li", {}, `${titleOf(key)}: `, h("a", { href: `#/sweep/${id}` }, "the sweep")));
+  const missing = fig.missing.map(key => h("li", {}, `${titleOf(key)}: not queued yet `,
+    h("button", { class: "secondary", onclick: async () => { const r = await queueStudySweep(paper, key); if (r.ok) route(); else alert(r.body.error); } }, "Queue it")));
+  setView(h("p", {}, h("a", { href: "#/papers" }, "← all figures")),
+    h("h1", {}, `${study ? study.title.split(":")[0] : paper}, figure ${fig.figure}`),
+    figurePanel(fig, `${paper}-figure-${figure}`, null),
+    h("div", { class: "panel" }, h("h2", {}, "Data"), h("ul", {}, ...from, ...missing)));
 }
 
 // ---------------------------------------------------------------- one sample
@@ -403,46 +431,59 @@ function outcomeReason(o) {
   return o.phase ? `cancelled during ${o.phase}` : "";
 }
 
+// The report's measured metrics and theory values.
+function anglesTable(rep) {
+  const rows = [];
+  for (const m of metricsOf(rep.protocol)) {
+    if (Number.isFinite(rep.metrics[m.name])) rows.push([`${m.label} — ${m.description}`, `${fmt(rep.metrics[m.name])}${m.unit}`]);
+  }
+  for (const q of rep.theory || []) rows.push([q.label, `${fmt(q.value)}°`]);
+  return h("table", { id: "angles" }, h("tbody", {}, ...rows.map(([k, v]) => h("tr", {}, h("th", {}, k), h("td", { class: "num" }, v)))));
+}
+
+// The final state in the plane of its first and last axes (a side view in 3D).
+function pileFigure(rep) {
+  const st = rep.final_state || { grains: [], contacts: [], walls: [] };
+  const up = (rep.dimension || 2) - 1;
+  const side = v => [v[0], v[up]];
+  const grains = st.grains.map(g => ({ ...g, position: side(g.position) }));
+  const walls = (st.walls || []).filter(w => (rep.dimension || 2) === 2 || Math.abs(w.normal[1]) < 1e-9)
+    .map(w => ({ ...w, point: side(w.point), normal: side(w.normal) }));
+  const box = rep.scene.box;
+  return pilePlot({ grains, contacts: st.contacts, walls, width: box ? box.width : 0,
+    surface: (rep.profiles || [])[0], angle: rep.metrics.theta_r });
+}
+
+function curves(rep) {
+  return (rep.series || []).map(c => h("div", {}, h("h2", {}, c.title),
+    h("div", { class: "figure", id: `series-${c.name}` }, linePlot({ points: c.points.map(([x, y]) => ({ x, y })), xLabel: c.x_label, yLabel: c.y_label, band: c.band || null })),
+    c.band ? h("p", { class: "muted" }, `Band: ${fmt(c.band.mean)} ± ${fmt(c.band.hi - c.band.mean)} (mean ± sd).`) : ""));
+}
+
 async function sampleView(hash) {
+  await loadRegistry();
   const r = await api(`/api/samples/${hash}`);
   if (!r.ok) { setView(h("h1", {}, "Sample not found"), h("p", { class: "error" }, r.body ? r.body.error : "")); return; }
   const rep = r.body;
-  const st = rep.final_state || { grains: [], contacts: [], walls: [] };
-  const a = rep.repose;
-  const angleRows = [];
-  if (a) angleRows.push(["θ_R method 1 (endpoints)", a.endpoints], ["θ_R method 2 (line)", a.line_fit], ["θ_R method 3 (parabola, headline)", a.cumulative_fit]);
-  if (rep.tilt) angleRows.push(["θ_T", rep.tilt.angle]);
-  if (rep.flux && rep.flux.steady) angleRows.push(["pile angle, steady mean", rep.flux.steady.mean], ["pile angle, steady sd", rep.flux.steady.sd], ["pile angle, largest", rep.flux.max]);
-  angleRows.push(["θ_MS = atan(3μ), eq. (3)", rep.theory.marginal_stability]);
-  if (rep.theory.tilting !== null && rep.theory.tilting !== undefined) angleRows.push(["θ_T by eq. (4)", rep.theory.tilting]);
-
-  const pile = h("div", { class: "figure", id: "pile" }, pilePlot({ grains: st.grains, contacts: st.contacts, walls: st.walls,
-    width: rep.scene.box.width, surface: rep.surface, angle: a ? a.cumulative_fit : NaN }));
   const trace = rep.energy_trace || [];
   const markers = [];
   trace.forEach((p, i) => { if (i > 0 && p.phase !== trace[i - 1].phase) markers.push({ x: p.iteration, label: p.phase }); });
   const ke = h("div", { class: "figure", id: "energy" }, trace.length ? linePlot({ points: trace.map(p => ({ x: p.iteration, y: p.kinetic_energy })),
-    xLabel: "iteration", yLabel: "kinetic energy per grain (erg)", title: "Kinetic energy (fig. 1b)", logY: true, markers }) : h("p", { class: "muted" }, "no trace"));
-  let fluxBox = "";
-  if (rep.flux && rep.flux.series.length) {
-    const s = rep.flux.steady;
-    fluxBox = h("div", {}, h("h2", {}, "Pile angle before each insertion (fig. 5)"), h("div", { class: "figure", id: "flux" },
-      linePlot({ points: rep.flux.series.map(p => ({ x: p.iteration, y: p.angle })), xLabel: "iteration", yLabel: "pile angle (°)",
-        band: s ? { lo: s.mean - s.sd, hi: s.mean + s.sd, mean: s.mean } : null })),
-      s ? h("p", { class: "muted" }, `Steady part: ${fmt(s.mean)} ± ${fmt(s.sd)}° over ${s.n} insertions (band: mean ± sd).`) : "");
-  }
+    xLabel: "iteration", yLabel: "kinetic energy per grain", title: "Kinetic energy (fig. 1b)", logY: true, markers }) : h("p", { class: "muted" }, "no trace"));
+  const physics = Object.entries(rep.options.physics || {}).map(([k, v]) => `, ${k.replace(/_/g, " ")} ${v}`).join("");
   const sceneText = JSON.stringify(rep.scene, null, 2);
   const copied = h("span", { class: "muted", "aria-live": "polite" });
   setView(
     h("h1", {}, `Sample: ${rep.protocol}, seed ${rep.seed}`),
     h("div", { class: "panel" },
       h("p", {}, h("span", { class: `tag ${rep.outcome.status}` }, rep.outcome.status), " ", outcomeReason(rep.outcome),
-        ` · ${rep.grains.initial} grains at start, ${rep.grains.lost} lost, ${rep.grains.final} at end · ${rep.iterations} steps, ${fmt(rep.simulated_time)} s simulated, ${fmt(rep.wall_time, 2)} s wall · ${rep.options.integrator}, normal force ${rep.options.normal_force}, shear spring ${rep.options.shear_spring} · ${rep.engine}`),
-      h("table", { id: "angles" }, h("tbody", {}, ...angleRows.map(([k, v]) => h("tr", {}, h("th", {}, k), h("td", { class: "num" }, `${fmt(v)}°`)))))),
+        ` · ${rep.dimension}D, model ${rep.model} · ${rep.grains.initial} grains at start, ${rep.grains.lost} lost, ${rep.grains.final} at end · ${rep.iterations} steps, ${fmt(rep.simulated_time)} s simulated, ${fmt(rep.wall_time, 2)} s wall · ${rep.options.integrator}${physics} · ${rep.engine}`),
+      anglesTable(rep)),
     h("div", { class: "two" },
-      h("div", {}, h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"), pile),
+      h("div", {}, h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"),
+        h("div", { class: "figure", id: "pile" }, pileFigure(rep))),
       h("div", {}, h("h2", {}, "Energy"), ke)),
-    fluxBox,
+    ...curves(rep),
     h("h2", {}, "Scene"),
     h("p", {}, h("button", { class: "secondary", id: "copy-scene", onclick: async () => {
       try { await navigator.clipboard.writeText(sceneText); copied.textContent = "Copied. Save it as scene.json and run: repose run scene.json"; }
@@ -458,15 +499,20 @@ async function fetchDoc(name) {
   return window.markdown.render(await r.text(), "/docs/");
 }
 
+function presetsText() {
+  const p = registry.protocols.get("fill_release") || [...registry.protocols.values()][0];
+  if (!p) return "";
+  return Object.entries(p.presets).map(([name, settings]) =>
+    `${name} (${Object.entries(settings).map(([k, v]) => `${k} = ${v}`).join(", ")})`).join("; ");
+}
+
 async function helpView() {
+  await loadRegistry();
   const intro = h("div", { class: "panel" },
-    h("p", {}, "repose runs parameter studies of the 2D granular piles of Lee & Herrmann (1993). A sweep varies scene values (axes) over a base scene, with several samples (seeds) per point; workers run the samples and this page shows their angles."),
-    h("ul", {},
-      h("li", {}, "θ_R: angle of repose after a box loses its side wall, by three slope methods (method 3 is the paper's headline)."),
-      h("li", {}, "θ_T: the tilt at which the released pile starts to move."),
-      h("li", {}, "Constant flux: grains added one at a time; the pile angle before each insertion traces the angle of marginal stability."),
-      h("li", {}, "Error bars show the sample standard deviation (the paper's error bar) or the standard error; points without a result (not settled, blown up) are counted apart.")),
-    h("p", {}, "Fidelity presets: quick (Verlet, coarser step, shorter equilibrium window), standard (Verlet at the default step), paper (Gear-5, the paper's integrator). What each costs and how far it moves the angles is measured below. The API is described at ",
+    h("p", {}, "repose runs parameter studies of granular piles. A sweep varies scene values (axes) over a base scene, with several samples (seeds) per point; workers run the samples and this page shows what they measured."),
+    h("ul", {}, ...[...registry.protocols.values()].map(p => h("li", {}, h("strong", {}, p.name), `: ${p.about}. Measures ${p.metrics.map(m => m.label).join(", ") || "nothing but its final state"}.`))),
+    h("p", {}, "Error bars show the sample standard deviation (the paper's error bar) or the standard error; points without a result (not settled, blown up) are counted apart."),
+    h("p", {}, `Fidelity presets (fill_release): ${presetsText()}. What each costs and how far it moves the angles is measured below. The API is described at `,
       h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), "."),
     h("p", {}, "Reports: ",
       h("a", { href: "#/doc/reproduction" }, "the reproduction of the paper's figures"), " · ",
@@ -492,10 +538,12 @@ async function route() {
   const parts = location.hash.replace(/^#\/?/, "").split("/").filter(Boolean);
   try {
     if (!parts.length) await sweepsView();
-    else if (parts[0] === "new") newView();
+    else if (parts[0] === "new") await newView();
+    else if (parts[0] === "papers") await papersView();
+    else if (parts[0] === "paper" && parts[2] === "figure") await paperFigureView(parts[1], parts[3]);
     else if (parts[0] === "help") await helpView();
     else if (parts[0] === "doc" && parts[1]) await docView(parts[1]);
-    else if (parts[0] === "sweep" && parts[2] === "figure") await figureView(parts[1], parts[3]);
+    else if (parts[0] === "sweep" && parts[2] === "figure") await sweepFigureView(parts[1], parts[3], parts[4]);
     else if (parts[0] === "sweep") await sweepView(parts[1]);
     else if (parts[0] === "sample") await sampleView(parts[1]);
     else setView(h("h1", {}, "Not found"), h("p", {}, h("a", { href: "#/" }, "Back to the sweeps")));

@@ -1,6 +1,7 @@
-// Small SVG plotting for the results browser: points with error bars,
-// faint per-sample points, theory curves, line traces with a band, and the
-// pile with its force chains. No dependencies.
+// Small SVG plotting for the results browser: figures as the API serves
+// them (means with error bars, single samples, theory curves, quoted values,
+// recorded curves with a band), line traces, and the pile with its force
+// chains. No dependencies, and no physics: every curve comes from the API.
 (() => {
 "use strict";
 
@@ -49,7 +50,7 @@ function hideTip() {
 }
 
 // A frame with axes; returns {svg, x(), y(), plot group}.
-function frame({ width = 720, height = 440, xRange, yRange, xLabel, yLabel, title, legendWidth = 0 }) {
+function frame({ width = 720, height = 440, xRange, yRange, xLabel, yLabel, title, legendWidth = 0, xTick = null }) {
   width += legendWidth;
   const m = { left: 64, right: 20 + legendWidth, top: title ? 34 : 16, bottom: 52 };
   const svg = el("svg", {
@@ -72,7 +73,7 @@ function frame({ width = 720, height = 440, xRange, yRange, xLabel, yLabel, titl
   for (const t of niceTicks(x0, x1)) {
     el("line", { x1: x(t), y1: m.top + ph, x2: x(t), y2: m.top + ph + 5 }, axes);
     const lab = el("text", { x: x(t), y: m.top + ph + 19, "text-anchor": "middle", fill: "#1d2330", stroke: "none" }, svg);
-    lab.textContent = fmt(t);
+    lab.textContent = xTick ? xTick(t) : fmt(t);
   }
   for (const t of niceTicks(y0, y1)) {
     el("line", { x1: m.left - 5, y1: y(t), x2: m.left, y2: y(t) }, axes);
@@ -98,64 +99,108 @@ function extent(values, pad = 0.06) {
   return [lo - p, hi + p];
 }
 
-// Points with error bars. series: [{name, points: [{x, mean, sd, sem, n, failures}], samples: [{x, y}]}]
-// theory: [{name, points: [{x, y}]}]; errors: "sd" | "sem".
-function errorBarPlot({ series, theory = [], errors = "sd", xLabel, yLabel, title, yFloor = null }) {
+// The colour of a measured series, and the legend entry of any series.
+function legendItems(series) {
+  let k = 0;
+  return series.filter(s => s.name).map(s => {
+    if (s.kind === "measured" || s.kind === "recorded") return { name: s.name, kind: s.kind, colour: PALETTE[k++ % PALETTE.length] };
+    return { name: s.name, kind: s.kind, colour: "#333" };
+  });
+}
+
+const DASH = { theory: "6 4", level: "2 3" };
+
+// A figure as the API serves it (see /api/openapi.json, FigureData):
+// measured means with error bars and their single samples, theory curves,
+// level lines, the paper's quoted values, and recorded curves with their
+// band. errors: "sd" | "sem" for the measured means.
+function figurePlot({ fig, errors = "sd", title = null }) {
+  const tx = fig.log_x ? v => (v > 0 ? Math.log10(v) : NaN) : v => v;
   const xs = [], ys = [];
-  for (const s of series) {
+  for (const s of fig.series) {
     for (const p of s.points) {
-      if (!Number.isFinite(p.mean)) continue;
-      const e = (errors === "sem" ? p.sem : p.sd) || 0;
-      xs.push(p.x); ys.push(p.mean - e, p.mean + e);
+      if (!Number.isFinite(p.y)) continue;
+      const e = s.kind === "measured" ? ((errors === "sem" ? p.sem : p.sd) || 0) : (p.sd || 0);
+      xs.push(tx(p.x)); ys.push(p.y - e, p.y + e);
+      for (const v of p.samples || []) ys.push(v);
     }
-    for (const q of s.samples || []) { xs.push(q.x); ys.push(q.y); }
+    if (s.band) ys.push(s.band.lo, s.band.hi);
   }
-  for (const t of theory) for (const p of t.points) { xs.push(p.x); ys.push(p.y); }
-  let yRange = extent(ys);
-  if (yFloor !== null) yRange[0] = Math.min(yRange[0], yFloor);
-  const items = series.filter(s => s.name).map((s, k) => ({ name: s.name, colour: PALETTE[k % PALETTE.length], dash: null }))
-    .concat(theory.map((t, k) => ({ name: t.name, colour: "#333", dash: k ? "2 3" : "6 4" })));
+  const items = legendItems(fig.series);
   const legendWidth = items.length ? 40 + 7.2 * Math.max(...items.map(it => it.name.length)) : 0;
-  const f = frame({ xRange: extent(xs), yRange, xLabel, yLabel, title, legendWidth });
-  series.forEach((s, k) => {
-    const colour = PALETTE[k % PALETTE.length];
-    const g = el("g", { class: "series", "data-series": s.name || "" }, f.plot);
-    for (const q of s.samples || []) {
-      if (!Number.isFinite(q.y)) continue;
-      el("circle", { cx: f.x(q.x), cy: f.y(q.y), r: 3, fill: colour, "fill-opacity": "0.3", class: "sample" }, g);
+  const xLabel = fig.log_x ? `${fig.x_label} (log scale)` : fig.x_label;
+  const f = frame({ xRange: extent(xs), yRange: extent(ys), xLabel, yLabel: fig.y_label, title, legendWidth, xTick: fig.log_x ? t => fmt(Math.pow(10, t)) : null });
+  const X = v => f.x(tx(v));
+  let k = 0;
+  for (const s of fig.series) {
+    const colour = (s.kind === "measured" || s.kind === "recorded") ? PALETTE[k++ % PALETTE.length] : "#333";
+    const g = el("g", { class: `series ${s.kind}`, "data-series": s.name || "" }, f.plot);
+    const pts = s.points.filter(p => Number.isFinite(p.y));
+    if (s.kind === "measured") drawMeans(f, g, s, pts, X, colour, errors);
+    else if (s.kind === "quoted") drawQuoted(f, g, s, pts, X);
+    else {
+      if (s.band) drawBand(f, g, s.band, colour);
+      const line = pts.map(p => `${X(p.x)},${f.y(p.y)}`).join(" ");
+      const cls = s.kind === "recorded" ? "trace" : s.kind;
+      el("polyline", { points: line, fill: "none", stroke: colour, "stroke-width": "1.5", "stroke-dasharray": DASH[s.kind] || "none", class: cls }, g);
     }
-    const line = s.points.filter(p => Number.isFinite(p.mean)).map(p => `${f.x(p.x)},${f.y(p.mean)}`);
-    if (line.length > 1) el("polyline", { points: line.join(" "), fill: "none", stroke: colour, "stroke-opacity": "0.35" }, g);
-    for (const p of s.points) {
-      if (!Number.isFinite(p.mean)) continue;
-      const e = (errors === "sem" ? p.sem : p.sd) || 0;
-      const cx = f.x(p.x);
-      const bar = el("g", { class: "errorbar", stroke: colour, "stroke-width": "1.5" }, g);
-      el("line", { x1: cx, y1: f.y(p.mean - e), x2: cx, y2: f.y(p.mean + e) }, bar);
-      el("line", { x1: cx - 5, y1: f.y(p.mean - e), x2: cx + 5, y2: f.y(p.mean - e) }, bar);
-      el("line", { x1: cx - 5, y1: f.y(p.mean + e), x2: cx + 5, y2: f.y(p.mean + e) }, bar);
-      const dot = el("circle", { cx, cy: f.y(p.mean), r: 5, fill: colour, class: "mean", tabindex: "0" }, g);
-      const text = `${s.name ? s.name + "\n" : ""}x = ${fmt(p.x)}\nmean = ${fmt(p.mean)}°\nsd = ${fmt(p.sd)}°\nsem = ${fmt(p.sem)}°\nn = ${p.n}` +
-        (p.failures ? `\nwithout result: ${p.failures}` : "");
-      el("title", {}, dot).textContent = text;
-      dot.addEventListener("mousemove", ev => showTip(ev, text));
-      dot.addEventListener("mouseleave", hideTip);
-      dot.addEventListener("focus", () => { const r = dot.getBoundingClientRect(); showTip({ clientX: r.right, clientY: r.bottom }, text); });
-      dot.addEventListener("blur", hideTip);
-    }
-  });
-  theory.forEach((t, k) => {
-    const pts = t.points.filter(p => Number.isFinite(p.y)).map(p => `${f.x(p.x)},${f.y(p.y)}`);
-    el("polyline", { points: pts.join(" "), fill: "none", stroke: "#333", "stroke-dasharray": k ? "2 3" : "6 4", "stroke-width": "1.5", class: "theory" }, f.plot);
-  });
-  // legend, to the right of the plot area
+  }
+  drawLegend(f, items);
+  return f.svg;
+}
+
+function drawMeans(f, g, s, pts, X, colour, errors) {
+  for (const p of pts) for (const v of p.samples || []) {
+    el("circle", { cx: X(p.x), cy: f.y(v), r: 3, fill: colour, "fill-opacity": "0.3", class: "sample" }, g);
+  }
+  if (pts.length > 1) el("polyline", { points: pts.map(p => `${X(p.x)},${f.y(p.y)}`).join(" "), fill: "none", stroke: colour, "stroke-opacity": "0.35" }, g);
+  for (const p of pts) {
+    const e = (errors === "sem" ? p.sem : p.sd) || 0;
+    errorBar(f, g, X(p.x), p.y, e, colour);
+    const dot = el("circle", { cx: X(p.x), cy: f.y(p.y), r: 5, fill: colour, class: "mean", tabindex: "0" }, g);
+    const text = `${s.name ? s.name + "\n" : ""}x = ${fmt(p.x)}\nmean = ${fmt(p.y)}\nsd = ${fmt(p.sd)}\nsem = ${fmt(p.sem)}\nn = ${p.n}` +
+      (p.failures ? `\nwithout result: ${p.failures}` : "");
+    tip(dot, text);
+  }
+}
+
+function drawQuoted(f, g, s, pts, X) {
+  for (const p of pts) {
+    errorBar(f, g, X(p.x), p.y, p.sd || 0, "#333");
+    const dot = el("circle", { cx: X(p.x), cy: f.y(p.y), r: 5, fill: "#ffffff", stroke: "#333", "stroke-width": "1.5", class: "quoted", tabindex: "0" }, g);
+    tip(dot, `${s.name}\nx = ${fmt(p.x)}\n${fmt(p.y)} ± ${fmt(p.sd)}`);
+  }
+}
+
+function errorBar(f, g, cx, y, e, colour) {
+  const bar = el("g", { class: "errorbar", stroke: colour, "stroke-width": "1.5" }, g);
+  el("line", { x1: cx, y1: f.y(y - e), x2: cx, y2: f.y(y + e) }, bar);
+  el("line", { x1: cx - 5, y1: f.y(y - e), x2: cx + 5, y2: f.y(y - e) }, bar);
+  el("line", { x1: cx - 5, y1: f.y(y + e), x2: cx + 5, y2: f.y(y + e) }, bar);
+}
+
+function drawBand(f, g, band, colour) {
+  el("rect", { x: f.m.left, y: f.y(band.hi), width: f.pw, height: Math.max(0, f.y(band.lo) - f.y(band.hi)), fill: colour, "fill-opacity": "0.08", class: "band" }, g);
+  for (const v of [band.lo, band.hi]) el("line", { x1: f.m.left, x2: f.m.left + f.pw, y1: f.y(v), y2: f.y(v), stroke: colour, "stroke-dasharray": "4 3" }, g);
+}
+
+function tip(dot, text) {
+  el("title", {}, dot).textContent = text;
+  dot.addEventListener("mousemove", ev => showTip(ev, text));
+  dot.addEventListener("mouseleave", hideTip);
+  dot.addEventListener("focus", () => { const r = dot.getBoundingClientRect(); showTip({ clientX: r.right, clientY: r.bottom }, text); });
+  dot.addEventListener("blur", hideTip);
+}
+
+// The legend, to the right of the plot area.
+function drawLegend(f, items) {
   items.forEach((it, k) => {
     const yy = f.m.top + 12 + 18 * k, xx = f.m.left + f.pw + 16;
-    if (it.dash) el("line", { x1: xx, y1: yy - 4, x2: xx + 22, y2: yy - 4, stroke: it.colour, "stroke-dasharray": it.dash, "stroke-width": "1.5" }, f.svg);
-    else el("circle", { cx: xx + 11, cy: yy - 4, r: 5, fill: it.colour }, f.svg);
+    if (it.kind === "measured") el("circle", { cx: xx + 11, cy: yy - 4, r: 5, fill: it.colour }, f.svg);
+    else if (it.kind === "quoted") el("circle", { cx: xx + 11, cy: yy - 4, r: 5, fill: "#fff", stroke: it.colour, "stroke-width": "1.5" }, f.svg);
+    else el("line", { x1: xx, y1: yy - 4, x2: xx + 22, y2: yy - 4, stroke: it.colour, "stroke-dasharray": DASH[it.kind] || "none", "stroke-width": "1.5" }, f.svg);
     el("text", { x: xx + 30, y: yy, fill: "#1d2330" }, f.svg).textContent = it.name;
   });
-  return f.svg;
 }
 
 // A line trace, optionally with a horizontal band [lo, hi] and a mean line.
@@ -264,32 +309,5 @@ function downloadPng(name, svg) {
   img.src = "data:image/svg+xml;charset=utf-8," + encodeURIComponent(svgText(svg));
 }
 
-// Eq. (3) and eq. (4) of Lee & Herrmann, as in the engine's theory module.
-const theory = {
-  marginal(mu) { return Math.atan(3 * mu) * 180 / Math.PI; },
-  eq4Friction(tT, tR) {
-    const t = tT * Math.PI / 180, r = tR * Math.PI / 180;
-    const plus = Math.PI / 3 + t, minus = Math.PI / 3 - t;
-    const R = (Math.tan(plus) + Math.tan(r) * Math.cos(plus)) / (Math.tan(minus) - Math.tan(r) * Math.cos(minus));
-    return (R * Math.cos(minus) - Math.cos(plus)) / (R * Math.sin(minus) + Math.sin(plus));
-  },
-  tilting(mu, tR) {
-    if (!(tR >= 0 && tR < 60)) return NaN;
-    const f = t => theory.eq4Friction(t, tR) - mu;
-    if (f(0) > 0) return NaN;
-    const limit = 60 - tR, step = limit / 200;
-    let lo = 0, hi = NaN;
-    for (let t = step; t < limit; t += step) {
-      const v = f(t);
-      if (!Number.isFinite(v)) return NaN;
-      if (v >= 0) { hi = t; break; }
-      lo = t;
-    }
-    if (!Number.isFinite(hi)) return NaN;
-    for (let i = 0; i < 80; i++) { const m = (lo + hi) / 2; if (f(m) < 0) lo = m; else hi = m; }
-    return (lo + hi) / 2;
-  },
-};
-
-window.plots = { errorBarPlot, linePlot, pilePlot, svgText, download, downloadPng, theory, fmt };
+window.plots = { figurePlot, linePlot, pilePlot, svgText, download, downloadPng, fmt };
 })();
