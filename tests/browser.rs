@@ -53,6 +53,9 @@ fn screenshots() -> PathBuf {
 /// navigate, evaluate and screenshot. Written here so the test needs no
 /// driver binary and nothing fetched at build time.
 struct Page {
+    /// The server the page's fragments are opened on, and visits so far.
+    base: String,
+    visits: u32,
     chrome: Child,
     socket: WebSocket<MaybeTlsStream<TcpStream>>,
     session: String,
@@ -97,6 +100,8 @@ impl Page {
         std::thread::spawn(move || for _ in lines {});
         let (socket, _) = tungstenite::connect(ws.as_str()).expect("DevTools socket");
         let mut page = Page {
+            base: String::new(),
+            visits: 0,
             chrome,
             socket,
             session: String::new(),
@@ -149,6 +154,13 @@ impl Page {
             json!({"expression": expression, "returnByValue": true}),
         );
         r["result"]["value"].clone()
+    }
+
+    /// Opens a view of the page (`#/sweep/ID`) as a fresh load.
+    fn visit(&mut self, fragment: &str) {
+        self.visits += 1;
+        let url = format!("{}/?v={}#{fragment}", self.base, self.visits);
+        self.open(&url);
     }
 
     fn open(&mut self, url: &str) {
@@ -264,22 +276,26 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     });
 
     let mut tab = Page::launch(&chrome);
-    let mut visit = 0;
-    let base = server.url.clone();
-    let mut open = |tab: &mut Page, fragment: &str| {
-        visit += 1;
-        tab.open(&format!("{base}/?v={visit}#{fragment}"));
-    };
+    tab.base = server.url.clone();
 
+    the_list_and_the_sweep(&mut tab, &id);
+    the_sweep_as_figures(&mut tab, &id);
+    the_samples(&mut tab, &hash, grains, &flux_hash);
+    the_form_and_the_reports(&mut tab);
+    a_failed_sample(&mut tab, &coarse_id);
+    the_study_buttons(&mut tab, &server, &rt);
+}
+
+fn the_list_and_the_sweep(tab: &mut Page, id: &str) {
     // 1. The list shows the sweep, done.
-    open(&mut tab, "/");
+    tab.visit("/");
     wait_for(
-        &mut tab,
+        tab,
         "the sweep in the list",
         "document.querySelector('#sweeps tbody tr[data-id]')",
     );
     let row = wait_for(
-        &mut tab,
+        tab,
         "the finished sweep",
         &format!("(() => {{ const r = document.querySelector('tr[data-id=\"{id}\"]'); return r && r.innerText.includes('4 done') && r.innerText; }})()"),
     );
@@ -287,31 +303,33 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     tab.screenshot("sweeps.png");
 
     // 2. The sweep's own page: a plot over its axis, its points and samples.
-    open(&mut tab, &format!("/sweep/{id}"));
+    tab.visit(&format!("/sweep/{id}"));
     wait_for(
-        &mut tab,
+        tab,
         "the sweep's plot",
         "document.querySelectorAll('#generic-plot svg circle.mean').length === 2",
     );
-    assert_eq!(count(&mut tab, "#points tbody tr"), 2);
-    assert_eq!(count(&mut tab, "#samples tbody tr"), 4);
+    assert_eq!(count(tab, "#points tbody tr"), 2);
+    assert_eq!(count(tab, "#samples tbody tr"), 4);
     tab.screenshot("sweep.png");
+}
 
+fn the_sweep_as_figures(tab: &mut Page, id: &str) {
     // 3. The sweep drawn as the paper's figure 3: both points with error
     //    bars, every sample, and atan(3μ) from the API.
-    assert!(count(&mut tab, &format!("a[href='#/sweep/{id}/figure/lh93/3']")) == 1);
-    open(&mut tab, &format!("/sweep/{id}/figure/lh93/3"));
+    assert!(count(tab, &format!("a[href='#/sweep/{id}/figure/lh93/3']")) == 1);
+    tab.visit(&format!("/sweep/{id}/figure/lh93/3"));
     wait_for(
-        &mut tab,
+        tab,
         "the figure",
         "document.querySelectorAll('#figure-plot svg circle.mean').length === 2",
     );
-    assert_eq!(count(&mut tab, "#figure-plot svg g.errorbar"), 3);
-    assert_eq!(count(&mut tab, "#figure-plot svg circle.sample"), 4);
-    assert_eq!(count(&mut tab, "#figure-plot svg polyline.theory"), 1);
-    assert_eq!(count(&mut tab, "#figure-plot svg circle.quoted"), 1);
+    assert_eq!(count(tab, "#figure-plot svg g.errorbar"), 3);
+    assert_eq!(count(tab, "#figure-plot svg circle.sample"), 4);
+    assert_eq!(count(tab, "#figure-plot svg polyline.theory"), 1);
+    assert_eq!(count(tab, "#figure-plot svg circle.quoted"), 1);
     let title = wait_for(
-        &mut tab,
+        tab,
         "a hover text",
         "document.querySelector('#figure-plot circle.mean title').textContent",
     );
@@ -319,21 +337,23 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     tab.screenshot("sweep-as-figure3.png");
 
     // Every figure of the paper, drawn from the study data the API serves.
-    paper_figures(&mut tab, &mut open);
+    paper_figures(tab);
+}
 
+fn the_samples(tab: &mut Page, hash: &str, grains: u64, flux_hash: &str) {
     // 4. A sample page draws every grain, force chains, the surface and the energy trace.
-    open(&mut tab, &format!("/sample/{hash}"));
+    tab.visit(&format!("/sample/{hash}"));
     wait_for(
-        &mut tab,
+        tab,
         "the pile",
         "document.querySelectorAll('#pile svg circle.grain').length",
     );
-    assert_eq!(count(&mut tab, "#pile svg circle.grain"), grains);
-    assert!(count(&mut tab, "#pile svg line.chain") > 0);
-    assert_eq!(count(&mut tab, "#pile svg polyline.surface"), 1);
-    assert_eq!(count(&mut tab, "#energy svg polyline.trace"), 1);
+    assert_eq!(count(tab, "#pile svg circle.grain"), grains);
+    assert!(count(tab, "#pile svg line.chain") > 0);
+    assert_eq!(count(tab, "#pile svg polyline.surface"), 1);
+    assert_eq!(count(tab, "#energy svg polyline.trace"), 1);
     let scene = wait_for(
-        &mut tab,
+        tab,
         "the scene",
         "document.querySelector('#scene-json').textContent",
     );
@@ -344,26 +364,24 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     tab.screenshot("sample.png");
 
     // 5. The constant-flux sample: the angle series with its fluctuation band (fig. 5).
-    open(&mut tab, &format!("/sample/{flux_hash}"));
+    tab.visit(&format!("/sample/{flux_hash}"));
     wait_for(
-        &mut tab,
+        tab,
         "the flux series",
         "document.querySelector('#series-pile_angle svg polyline.trace')",
     );
-    assert_eq!(count(&mut tab, "#series-pile_angle svg rect.band"), 1);
+    assert_eq!(count(tab, "#series-pile_angle svg rect.band"), 1);
     tab.screenshot("flux.png");
+}
 
+fn the_form_and_the_reports(tab: &mut Page) {
     // 6. A bad value in the form: the API's message appears beside the axis.
-    open(&mut tab, "/new");
-    wait_for(
-        &mut tab,
-        "the form",
-        "document.querySelector('#sweep-form')",
-    );
+    tab.visit("/new");
+    wait_for(tab, "the form", "document.querySelector('#sweep-form')");
     tab.evaluate("document.querySelector('#f-axes input.values').value = '0.2, -0.5'");
     tab.evaluate("document.querySelector('#f-submit').click()");
     let msg = wait_for(
-        &mut tab,
+        tab,
         "the validation message",
         "document.querySelector('#f-axes .field-error').textContent",
     );
@@ -375,16 +393,16 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     tab.screenshot("form-error.png");
 
     // 7. Help shows the speed/accuracy report: its tables and both plots.
-    open(&mut tab, "/help");
+    tab.visit("/help");
     wait_for(
-        &mut tab,
+        tab,
         "the speed/accuracy report",
         "document.querySelector('#speed-accuracy .doc table')",
     );
-    assert!(count(&mut tab, "#speed-accuracy .doc table") >= 3);
-    assert_eq!(count(&mut tab, "#speed-accuracy .doc img"), 2);
+    assert!(count(tab, "#speed-accuracy .doc table") >= 3);
+    assert_eq!(count(tab, "#speed-accuracy .doc img"), 2);
     let loaded = wait_for(
-        &mut tab,
+        tab,
         "the plots to load",
         "Array.from(document.querySelectorAll('#speed-accuracy img')).every(i => i.complete && i.naturalWidth > 0) || null",
     );
@@ -394,24 +412,26 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     // 8. The reproduction report, linked from Help, with every figure.
     tab.evaluate("document.querySelector('a[href=\"#/doc/reproduction\"]').click()");
     wait_for(
-        &mut tab,
+        tab,
         "the reproduction report",
         "document.querySelector('.doc h2') && document.querySelectorAll('.doc img').length >= 9 || null",
     );
     let title = tab.evaluate("document.querySelector('.doc h2').textContent");
     assert!(title.as_str().unwrap().contains("Reproduction"), "{title}");
     let loaded = wait_for(
-        &mut tab,
+        tab,
         "the figures to load",
         "Array.from(document.querySelectorAll('.doc img')).every(i => i.complete && i.naturalWidth > 0) || null",
     );
     assert_eq!(loaded, json!(true));
     tab.screenshot("reproduction.png");
+}
 
+fn a_failed_sample(tab: &mut Page, coarse_id: &str) {
     // 9. A failed sample says why, in the sweep's sample list and on its own page.
-    open(&mut tab, &format!("/sweep/{coarse_id}"));
+    tab.visit(&format!("/sweep/{coarse_id}"));
     let reason = wait_for(
-        &mut tab,
+        tab,
         "the failed sample's reason",
         "(() => { const r = document.querySelector('#samples tbody tr'); return r && r.querySelector('.tag.failed') && r.querySelector('.reason') && r.querySelector('.reason').textContent; })()",
     );
@@ -423,7 +443,7 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     tab.screenshot("failed-sweep.png");
     tab.evaluate("document.querySelector('#samples tbody tr a').click()");
     let shown = wait_for(
-        &mut tab,
+        tab,
         "the failed sample's page",
         "document.querySelector('#pile') && document.querySelector('.panel .tag.failed') && document.querySelector('.panel p').textContent",
     );
@@ -432,18 +452,20 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "{reason} / {shown}"
     );
     tab.screenshot("failed-sample.png");
+}
 
+fn the_study_buttons(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtime) {
     // 10. The button behind figure 3 queues the study's sweep, the one
     //     `repose reproduce` queues.
-    open(&mut tab, "/new");
+    tab.visit("/new");
     wait_for(
-        &mut tab,
+        tab,
         "the study buttons",
         "document.querySelector('button[data-study=\"lh93/fig347\"]')",
     );
     tab.evaluate("document.querySelector('button[data-study=\"lh93/fig347\"]').click()");
     let queued = wait_for(
-        &mut tab,
+        tab,
         "the queued study sweep",
         "location.hash.startsWith('#/sweep/') && location.hash.slice(8)",
     );
@@ -493,8 +515,8 @@ async fn run_study(server: &Server) {
 
 /// Opens every figure of the paper and checks what it draws: means where it
 /// measures, theory curves and quoted values where the study has them.
-fn paper_figures(tab: &mut Page, open: &mut impl FnMut(&mut Page, &str)) {
-    open(tab, "/papers");
+fn paper_figures(tab: &mut Page) {
+    tab.visit("/papers");
     wait_for(
         tab,
         "the papers",
@@ -518,7 +540,7 @@ fn paper_figures(tab: &mut Page, open: &mut impl FnMut(&mut Page, &str)) {
         ("gamma_n", 2, 0, 3),
     ];
     for (fig, means, theory, quoted) in expected {
-        open(tab, &format!("/paper/lh93/figure/{fig}"));
+        tab.visit(&format!("/paper/lh93/figure/{fig}"));
         wait_for(
             tab,
             &format!("figure {fig}"),

@@ -66,9 +66,50 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
         );
     }
 
-    // Every point in the report against the samples the server stored.
     let sweeps = numbers["sweeps"].as_array().unwrap();
     assert_eq!(sweeps.len(), 6);
+    let checked = points_match_samples(&server, sweeps, &markdown).await;
+    assert!(checked >= 20, "only {checked} aggregates checked");
+
+    // The comparison table quotes the same aggregates it names.
+    let fig347 = sweeps.iter().find(|s| s["key"] == "fig347").unwrap();
+    let at = |mu: f64| {
+        fig347["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| (p["point"]["contact.mu"].as_f64().unwrap() - mu).abs() < 1e-9)
+            .unwrap()["metrics"]["theta_r"]["mean"]
+            .as_f64()
+            .unwrap()
+    };
+    let row = numbers["comparison"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["quantity"].as_str().unwrap().starts_with("θ_R method 3"))
+        .unwrap();
+    assert_eq!(row["ours"]["mean"].as_f64().unwrap(), at(0.2));
+
+    // θ_R rises with μ.
+    let (low, mid, high) = (at(0.1), at(0.2), at(0.3));
+    println!("θ_R: μ 0.1 {low:.2}°, 0.2 {mid:.2}°, 0.3 {high:.2}°");
+    assert!(high > low + 5.0, "θ_R does not rise with μ: {low} → {high}");
+
+    figures_are_the_served_ones(&server, &numbers).await;
+
+    // The page can open the report the server carries.
+    let resp = reqwest::get(format!("{}/docs/reproduction.md", server.url))
+        .await
+        .unwrap();
+    assert!(resp.status().is_success());
+    assert!(resp.text().await.unwrap().starts_with("# Reproduction"));
+}
+
+/// Every point in the report against the samples the server stored, and
+/// the Markdown showing the same numbers; returns how many were checked.
+async fn points_match_samples(server: &Server, sweeps: &[Value], markdown: &str) -> usize {
+    // Every point in the report against the samples the server stored.
     let mut checked = 0;
     for sweep in sweeps {
         let id = sweep["id"].as_str().unwrap();
@@ -112,35 +153,14 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
             }
         }
     }
-    assert!(checked >= 20, "only {checked} aggregates checked");
 
-    // The comparison table quotes the same aggregates it names.
-    let fig347 = sweeps.iter().find(|s| s["key"] == "fig347").unwrap();
-    let at = |mu: f64| {
-        fig347["points"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| (p["point"]["contact.mu"].as_f64().unwrap() - mu).abs() < 1e-9)
-            .unwrap()["metrics"]["theta_r"]["mean"]
-            .as_f64()
-            .unwrap()
-    };
-    let row = numbers["comparison"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["quantity"].as_str().unwrap().starts_with("θ_R method 3"))
-        .unwrap();
-    assert_eq!(row["ours"]["mean"].as_f64().unwrap(), at(0.2));
+    checked
+}
 
-    // θ_R rises with μ.
-    let (low, mid, high) = (at(0.1), at(0.2), at(0.3));
-    println!("θ_R: μ 0.1 {low:.2}°, 0.2 {mid:.2}°, 0.3 {high:.2}°");
-    assert!(high > low + 5.0, "θ_R does not rise with μ: {low} → {high}");
-
-    // Each figure in the report is the figure data the API serves the page
-    // for the same sweeps.
+/// Each figure in the report is the figure data the API serves the page
+/// for the same sweeps.
+async fn figures_are_the_served_ones(server: &Server, numbers: &Value) {
+    let sweeps = numbers["sweeps"].as_array().unwrap();
     let bindings: Vec<String> = sweeps
         .iter()
         .map(|s| {
@@ -164,11 +184,4 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
         assert_eq!(&served, f, "figure {key}");
         assert!(f["missing"].as_array().unwrap().is_empty(), "{key}: {f}");
     }
-
-    // The page can open the report the server carries.
-    let resp = reqwest::get(format!("{}/docs/reproduction.md", server.url))
-        .await
-        .unwrap();
-    assert!(resp.status().is_success());
-    assert!(resp.text().await.unwrap().starts_with("# Reproduction"));
 }

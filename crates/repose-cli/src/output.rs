@@ -51,38 +51,16 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         r.seed,
         grains.len()
     );
-    // walls, seen edge-on: those whose normal lies in the drawn plane
-    for wall in &state.walls {
-        let (nx, ny) = (at(&wall.normal, 0), at(&wall.normal, up));
-        if r.dimension == 3 && at(&wall.normal, 1).abs() > 1e-9 {
-            continue;
-        }
-        let p = nalgebra::Vector2::new(at(&wall.point, 0), at(&wall.point, up));
-        let t = nalgebra::Vector2::new(ny, -nx).normalize();
-        let far = 1e3;
-        let (mut a, mut b) = (p - t * far, p + t * far);
-        for l in &wall.limits {
-            if l.axis == 0 {
-                if let Some(m) = l.min {
-                    a.x = a.x.max(m);
-                    b.x = b.x.max(m);
-                }
-                if let Some(m) = l.max {
-                    a.x = a.x.min(m);
-                    b.x = b.x.min(m);
-                }
-            }
-        }
-        let clip = |v: f64, lo: f64, hi: f64| v.clamp(lo, hi);
-        let _ = writeln!(
-            s,
-            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#333" stroke-width="3"/>"##,
-            px(clip(a.x, xmin, xmax)),
-            py(clip(a.y, ymin, ymax)),
-            px(clip(b.x, xmin, xmax)),
-            py(clip(b.y, ymin, ymax))
-        );
-    }
+    let view = View {
+        px: &px,
+        py: &py,
+        xmin,
+        xmax,
+        ymin,
+        ymax,
+        up,
+    };
+    s.push_str(&walls_svg(r, &view));
     for g in grains {
         let _ = writeln!(
             s,
@@ -92,25 +70,7 @@ pub fn snapshot_svg(r: &RunReport) -> String {
             g.radius * scale
         );
     }
-    let by_id: HashMap<u32, usize> = grains.iter().enumerate().map(|(k, g)| (g.id, k)).collect();
-    let fmax = state.contacts.iter().map(|c| c.force).fold(0.0, f64::max);
-    if fmax > 0.0 {
-        for c in &state.contacts {
-            let (Some(&a), Some(&b)) = (by_id.get(&c.a), by_id.get(&c.b)) else {
-                continue;
-            };
-            let (ga, gb) = (&grains[a], &grains[b]);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="#202020" stroke-width="{:.2}" stroke-linecap="round"/>"##,
-                px(at(&ga.position, 0)),
-                py(at(&ga.position, up)),
-                px(at(&gb.position, 0)),
-                py(at(&gb.position, up)),
-                0.3 + 5.0 * c.force / fmax
-            );
-        }
-    }
+    s.push_str(&chains_svg(r, &view));
     if let (Some(surface), Some(angle)) = (r.profiles.first(), r.metric("theta_r")) {
         let pts: Vec<String> = surface
             .x
@@ -193,6 +153,86 @@ pub fn vtk(r: &RunReport) -> String {
                 v => xyz(v),
             };
             let _ = writeln!(s, "{w}");
+        }
+    }
+    s
+}
+
+/// The drawn plane: the map from the first and last axes to the page.
+struct View<'a> {
+    px: &'a dyn Fn(f64) -> f64,
+    py: &'a dyn Fn(f64) -> f64,
+    xmin: f64,
+    xmax: f64,
+    ymin: f64,
+    ymax: f64,
+    up: usize,
+}
+
+/// The walls, seen edge-on: those whose normal lies in the drawn plane.
+fn walls_svg(r: &RunReport, v: &View) -> String {
+    let Some(state) = &r.final_state else {
+        return String::new();
+    };
+    let mut s = String::new();
+    for wall in &state.walls {
+        let (nx, ny) = (at(&wall.normal, 0), at(&wall.normal, v.up));
+        if r.dimension == 3 && at(&wall.normal, 1).abs() > 1e-9 {
+            continue;
+        }
+        let p = nalgebra::Vector2::new(at(&wall.point, 0), at(&wall.point, v.up));
+        let t = nalgebra::Vector2::new(ny, -nx).normalize();
+        let far = 1e3;
+        let (mut a, mut b) = (p - t * far, p + t * far);
+        for l in &wall.limits {
+            if l.axis == 0 {
+                if let Some(m) = l.min {
+                    a.x = a.x.max(m);
+                    b.x = b.x.max(m);
+                }
+                if let Some(m) = l.max {
+                    a.x = a.x.min(m);
+                    b.x = b.x.min(m);
+                }
+            }
+        }
+        let clip = |v: f64, lo: f64, hi: f64| v.clamp(lo, hi);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#333" stroke-width="3"/>"##,
+            (v.px)(clip(a.x, v.xmin, v.xmax)),
+            (v.py)(clip(a.y, v.ymin, v.ymax)),
+            (v.px)(clip(b.x, v.xmin, v.xmax)),
+            (v.py)(clip(b.y, v.ymin, v.ymax))
+        );
+    }
+    s
+}
+
+/// Lines between touching centres, as wide as their normal force.
+fn chains_svg(r: &RunReport, v: &View) -> String {
+    let Some(state) = &r.final_state else {
+        return String::new();
+    };
+    let grains = &state.grains;
+    let mut s = String::new();
+    let by_id: HashMap<u32, usize> = grains.iter().enumerate().map(|(k, g)| (g.id, k)).collect();
+    let fmax = state.contacts.iter().map(|c| c.force).fold(0.0, f64::max);
+    if fmax > 0.0 {
+        for c in &state.contacts {
+            let (Some(&a), Some(&b)) = (by_id.get(&c.a), by_id.get(&c.b)) else {
+                continue;
+            };
+            let (ga, gb) = (&grains[a], &grains[b]);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="#202020" stroke-width="{:.2}" stroke-linecap="round"/>"##,
+                (v.px)(at(&ga.position, 0)),
+                (v.py)(at(&ga.position, v.up)),
+                (v.px)(at(&gb.position, 0)),
+                (v.py)(at(&gb.position, v.up)),
+                0.3 + 5.0 * c.force / fmax
+            );
         }
     }
     s

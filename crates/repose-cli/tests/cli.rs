@@ -301,3 +301,50 @@ fn tradeoff_reports_the_shift_of_each_preset_from_its_own_samples() {
     assert_eq!(read(".csv"), again);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
+    let dir = std::env::temp_dir().join(format!("repose-cli-3d-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("drop.toml");
+    std::fs::write(
+        &scene,
+        "protocol = \"free_run\"\ndimension = 3\nduration = 0.02\n\
+         [[particles]]\nposition = [0.0, 0.0, 0.5]\nradius = 0.1\n\
+         [[particles]]\nposition = [0.5, 0.2, 0.3]\nvelocity = [0.0, 0.0, -10.0]\nradius = 0.1\n\
+         [[walls]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n",
+    )
+    .unwrap();
+    let vtk = dir.join("drop.vtk");
+    let out = repose(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--vtk",
+        vtk.to_str().unwrap(),
+    ]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("free_run (3D"), "{stdout}");
+    let vtk = std::fs::read_to_string(vtk).unwrap();
+    let points: Vec<Vec<f64>> = vtk
+        .lines()
+        .skip_while(|l| !l.starts_with("POINTS"))
+        .skip(1)
+        .take(2)
+        .map(|l| l.split(' ').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    // The first sphere fell freely for 0.02 s: z = 0.5 − g t²/2.
+    assert_eq!(points[0].len(), 3);
+    let expected = 0.5 - 0.5 * 981.0 * 0.02 * 0.02;
+    assert!((points[0][2] - expected).abs() < 1e-3, "{points:?}");
+    assert!(points[1][1] == 0.2, "{points:?}");
+    // A 2D vector where a 3D one is needed is refused, naming the field.
+    let out = repose(&["run", scene.to_str().unwrap(), "--set", "gravity=[0, -981]"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("gravity"),
+        "{}",
+        text(&out.stderr)
+    );
+    std::fs::remove_dir_all(dir).ok();
+}

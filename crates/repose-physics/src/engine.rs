@@ -348,7 +348,7 @@ where
             }
             let dist = dist2.sqrt();
             let touch = pair_touch(p, i, j, r, dist, L::ROTATES);
-            let fraction = touch.overlap / p.radius[i].min(p.radius[j]);
+            let fraction = touch.overlap / touch.radius_i.min(touch.radius_j);
             if fraction > worst {
                 worst = fraction;
                 worst_pair = k;

@@ -91,14 +91,13 @@ impl Chart {
         }
     }
 
-    /// The chart as a standalone SVG document.
-    pub fn svg(&self) -> String {
-        let finite = |v: f64| v.is_finite();
+    /// The data ranges with padding, in plotted coordinates.
+    fn frame(&self) -> Frame {
         let mut xs: Vec<f64> = Vec::new();
         let mut ys: Vec<f64> = Vec::new();
         for s in &self.series {
             for &(x, y, e) in &s.points {
-                if finite(x) && finite(y) {
+                if x.is_finite() && y.is_finite() {
                     xs.push(self.x_of(x));
                     let e = if e.is_finite() { e } else { 0.0 };
                     ys.push(y - e);
@@ -111,11 +110,18 @@ impl Chart {
         }
         let (x0, x1) = padded_range(&xs);
         let (y0, y1) = padded_range(&ys);
-        let pw = W - LEFT - RIGHT;
-        let ph = H - TOP - BOTTOM;
-        let px = |x: f64| LEFT + (self.x_of(x) - x0) / (x1 - x0) * pw;
-        let py = |y: f64| TOP + (y1 - y) / (y1 - y0) * ph;
+        Frame {
+            x0,
+            x1,
+            y0,
+            y1,
+            log_x: self.log_x,
+        }
+    }
 
+    /// The chart as a standalone SVG document.
+    pub fn svg(&self) -> String {
+        let f = self.frame();
         let mut s = String::new();
         let _ = writeln!(
             s,
@@ -128,13 +134,26 @@ impl Chart {
             LEFT,
             esc(&self.title)
         );
-        // Axes and ticks.
+        s.push_str(&self.axes(&f));
+        for (k, series) in self.series.iter().enumerate() {
+            let c = COLOURS[k % COLOURS.len()];
+            s.push_str(&series.svg(&f, c));
+            s.push_str(&series.legend_entry(k, c));
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+
+    /// The frame, grid, ticks, axis labels and the reference line.
+    fn axes(&self, f: &Frame) -> String {
+        let mut s = String::new();
+        let (pw, ph) = (PW, PH);
         let _ = writeln!(
             s,
             r##"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
         );
-        for t in ticks(y0, y1) {
-            let y = py(t);
+        for t in ticks(f.y0, f.y1) {
+            let y = f.py(t);
             let _ = writeln!(
                 s,
                 r##"<line x1="{LEFT}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#e4e4e4"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
@@ -144,26 +163,8 @@ impl Chart {
                 tick_label(t)
             );
         }
-        let xticks: Vec<(f64, String)> = if self.log_x {
-            let (a, b) = (x0.floor() as i32, x1.ceil() as i32);
-            let mut v = Vec::new();
-            for e in a..=b {
-                for m in [1.0, 2.0, 5.0] {
-                    let l = (m * 10f64.powi(e)).log10();
-                    if l >= x0 && l <= x1 {
-                        v.push((l, tick_label(m * 10f64.powi(e))));
-                    }
-                }
-            }
-            v
-        } else {
-            ticks(x0, x1)
-                .into_iter()
-                .map(|t| (t, tick_label(t)))
-                .collect()
-        };
-        for (t, label) in xticks {
-            let x = LEFT + (t - x0) / (x1 - x0) * pw;
+        for (t, label) in f.x_ticks() {
+            let x = LEFT + (t - f.x0) / (f.x1 - f.x0) * pw;
             let _ = writeln!(
                 s,
                 r##"<line x1="{x:.1}" x2="{x:.1}" y1="{TOP}" y2="{}" stroke="#e4e4e4"/><text x="{x:.1}" y="{}" text-anchor="middle">{label}</text>"##,
@@ -185,112 +186,157 @@ impl Chart {
             esc(&self.y_label)
         );
         if let Some(r) = self.y_rule {
-            let y = py(r);
+            let y = f.py(r);
             let _ = writeln!(
                 s,
                 r##"<line x1="{LEFT}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#888" stroke-dasharray="2 3"/>"##,
                 LEFT + pw
             );
         }
+        s
+    }
+}
 
-        // Series.
-        for (k, series) in self.series.iter().enumerate() {
-            let c = COLOURS[k % COLOURS.len()];
-            let pts: Vec<(f64, f64, f64)> = series
-                .points
-                .iter()
-                .copied()
-                .filter(|&(x, y, _)| finite(x) && finite(y))
+/// Width and height of the plotting area.
+const PW: f64 = W - LEFT - RIGHT;
+const PH: f64 = H - TOP - BOTTOM;
+
+/// The plotted ranges and the map from data to the page.
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    log_x: bool,
+}
+
+impl Frame {
+    fn px(&self, x: f64) -> f64 {
+        let x = if self.log_x { x.max(1e-300).log10() } else { x };
+        LEFT + (x - self.x0) / (self.x1 - self.x0) * PW
+    }
+
+    fn py(&self, y: f64) -> f64 {
+        TOP + (self.y1 - y) / (self.y1 - self.y0) * PH
+    }
+
+    /// Tick positions (in plotted coordinates) with their labels; 1, 2, 5
+    /// per decade on a log axis.
+    fn x_ticks(&self) -> Vec<(f64, String)> {
+        if !self.log_x {
+            return ticks(self.x0, self.x1)
+                .into_iter()
+                .map(|t| (t, tick_label(t)))
                 .collect();
-            match series.style {
-                Style::Line | Style::Dashed => {
-                    let d: Vec<String> = pts
-                        .iter()
-                        .map(|&(x, y, _)| format!("{:.1},{:.1}", px(x), py(y)))
-                        .collect();
-                    let dash = if series.style == Style::Dashed {
-                        r#" stroke-dasharray="6 4""#
-                    } else {
-                        ""
-                    };
-                    let _ = writeln!(
-                        s,
-                        r##"<polyline points="{}" fill="none" stroke="{c}" stroke-width="1.5"{dash}/>"##,
-                        d.join(" ")
-                    );
-                }
-                Style::Points | Style::Open => {
-                    let fill = if series.style == Style::Open {
-                        "#ffffff"
-                    } else {
-                        c
-                    };
-                    for (i, &(x, y, e)) in pts.iter().enumerate() {
-                        let (cx, cy) = (px(x), py(y));
-                        if e.is_finite() && e > 0.0 {
-                            let _ = writeln!(
-                                s,
-                                r##"<line x1="{cx:.1}" x2="{cx:.1}" y1="{:.1}" y2="{:.1}" stroke="{c}"/>"##,
-                                py(y - e),
-                                py(y + e)
-                            );
-                        }
-                        let shape = if series.style == Style::Open {
-                            format!(
-                                r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{fill}" stroke="{c}" stroke-width="1.5"/>"##,
-                                cx - 4.0,
-                                cy - 4.0
-                            )
-                        } else {
-                            format!(r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="4" fill="{fill}"/>"##)
-                        };
-                        let _ = writeln!(s, "{shape}");
-                        if let Some(label) = series.labels.get(i) {
-                            let _ = writeln!(
-                                s,
-                                r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="{c}">{}</text>"##,
-                                cx + 6.0,
-                                cy - 5.0,
-                                esc(label)
-                            );
-                        }
-                    }
+        }
+        let (a, b) = (self.x0.floor() as i32, self.x1.ceil() as i32);
+        let mut v = Vec::new();
+        for e in a..=b {
+            for m in [1.0, 2.0, 5.0] {
+                let l = (m * 10f64.powi(e)).log10();
+                if l >= self.x0 && l <= self.x1 {
+                    v.push((l, tick_label(m * 10f64.powi(e))));
                 }
             }
-            // Legend entry.
-            let ly = TOP + 14.0 + 18.0 * k as f64;
-            let lx = W - RIGHT + 14.0;
-            let mark = match series.style {
-                Style::Line => format!(
-                    r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5"/>"##,
-                    lx + 16.0
-                ),
-                Style::Dashed => format!(
-                    r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5" stroke-dasharray="6 4"/>"##,
-                    lx + 16.0
-                ),
-                Style::Points => {
-                    format!(
-                        r##"<circle cx="{}" cy="{ly}" r="4" fill="{c}"/>"##,
-                        lx + 8.0
-                    )
-                }
-                Style::Open => format!(
-                    r##"<rect x="{}" y="{}" width="8" height="8" fill="#fff" stroke="{c}" stroke-width="1.5"/>"##,
-                    lx + 4.0,
-                    ly - 4.0
-                ),
+        }
+        v
+    }
+}
+
+impl Series {
+    /// Its line, or its markers with error bars and labels.
+    fn svg(&self, f: &Frame, c: &str) -> String {
+        let mut s = String::new();
+        let pts: Vec<(f64, f64, f64)> = self
+            .points
+            .iter()
+            .copied()
+            .filter(|&(x, y, _)| x.is_finite() && y.is_finite())
+            .collect();
+        if matches!(self.style, Style::Line | Style::Dashed) {
+            let d: Vec<String> = pts
+                .iter()
+                .map(|&(x, y, _)| format!("{:.1},{:.1}", f.px(x), f.py(y)))
+                .collect();
+            let dash = if self.style == Style::Dashed {
+                r#" stroke-dasharray="6 4""#
+            } else {
+                ""
             };
             let _ = writeln!(
                 s,
-                r##"{mark}<text x="{}" y="{}">{}</text>"##,
-                lx + 22.0,
-                ly + 4.0,
-                esc(&series.name)
+                r##"<polyline points="{}" fill="none" stroke="{c}" stroke-width="1.5"{dash}/>"##,
+                d.join(" ")
             );
+            return s;
         }
-        s.push_str("</svg>\n");
+        let open = self.style == Style::Open;
+        let fill = if open { "#ffffff" } else { c };
+        for (i, &(x, y, e)) in pts.iter().enumerate() {
+            let (cx, cy) = (f.px(x), f.py(y));
+            if e.is_finite() && e > 0.0 {
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{cx:.1}" x2="{cx:.1}" y1="{:.1}" y2="{:.1}" stroke="{c}"/>"##,
+                    f.py(y - e),
+                    f.py(y + e)
+                );
+            }
+            if open {
+                let _ = writeln!(
+                    s,
+                    r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{fill}" stroke="{c}" stroke-width="1.5"/>"##,
+                    cx - 4.0,
+                    cy - 4.0
+                );
+            } else {
+                let _ = writeln!(
+                    s,
+                    r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="4" fill="{fill}"/>"##
+                );
+            }
+            if let Some(label) = self.labels.get(i) {
+                let _ = writeln!(
+                    s,
+                    r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="{c}">{}</text>"##,
+                    cx + 6.0,
+                    cy - 5.0,
+                    esc(label)
+                );
+            }
+        }
         s
+    }
+
+    /// Its line in the legend, the `k`-th.
+    fn legend_entry(&self, k: usize, c: &str) -> String {
+        let ly = TOP + 14.0 + 18.0 * k as f64;
+        let lx = W - RIGHT + 14.0;
+        let mark = match self.style {
+            Style::Line => format!(
+                r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5"/>"##,
+                lx + 16.0
+            ),
+            Style::Dashed => format!(
+                r##"<line x1="{lx}" x2="{}" y1="{ly}" y2="{ly}" stroke="{c}" stroke-width="1.5" stroke-dasharray="6 4"/>"##,
+                lx + 16.0
+            ),
+            Style::Points => format!(
+                r##"<circle cx="{}" cy="{ly}" r="4" fill="{c}"/>"##,
+                lx + 8.0
+            ),
+            Style::Open => format!(
+                r##"<rect x="{}" y="{}" width="8" height="8" fill="#fff" stroke="{c}" stroke-width="1.5"/>"##,
+                lx + 4.0,
+                ly - 4.0
+            ),
+        };
+        format!(
+            "{mark}<text x=\"{}\" y=\"{}\">{}</text>\n",
+            lx + 22.0,
+            ly + 4.0,
+            esc(&self.name)
+        )
     }
 }
 

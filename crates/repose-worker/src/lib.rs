@@ -13,8 +13,8 @@
 //! result: its outcome and reason are stored like any other. Only a scene
 //! that cannot even be read marks the job failed.
 
-use repose_physics::{Observer, Progress, RunReport, Scene};
-use repose_store::{Lease, ResultRecord, Store};
+use repose_physics::{Observer, Progress, RunReport, Scene, SceneError};
+use repose_store::{Claim, Lease, ResultRecord, Store};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -69,6 +69,26 @@ impl Observer for StopFlag {
     }
 }
 
+/// How one job ended for this worker.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ending {
+    Completed,
+    Released,
+    Lost,
+    Failed,
+}
+
+impl Tally {
+    fn add(&mut self, ending: Ending) {
+        match ending {
+            Ending::Completed => self.completed += 1,
+            Ending::Released => self.released += 1,
+            Ending::Lost => self.lost += 1,
+            Ending::Failed => self.failed += 1,
+        }
+    }
+}
+
 /// Runs jobs until `shutdown` turns true (or, with `exit_when_idle`, until
 /// the queue is empty).
 pub async fn run_worker(
@@ -99,123 +119,116 @@ pub async fn run_worker(
             continue;
         };
         tracing::info!(owner = %config.owner, job = %job.job_id, attempt = job.attempts, "claimed");
+        tally.add(work(&store, &config, &job, &mut shutdown).await);
+    }
+}
 
-        let scene: Scene = match serde_json::from_str::<serde_json::Value>(&job.scene)
-            .map_err(|e| e.to_string())
-            .and_then(|v| Scene::from_stored(v).map_err(|e| e.to_string()))
-        {
-            Ok(s) => s,
-            Err(reason) => {
-                let _ = store
-                    .fail(
-                        &job.job_id,
-                        &config.owner,
-                        &format!("unreadable scene: {reason}"),
-                    )
-                    .await;
-                tally.failed += 1;
-                continue;
-            }
-        };
+/// Ends a job without a result, saying why.
+async fn give_up(store: &Store, config: &WorkerConfig, job: &Claim, reason: String) -> Ending {
+    let _ = store.fail(&job.job_id, &config.owner, &reason).await;
+    Ending::Failed
+}
 
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        let mut simulation =
-            tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut StopFlag(flag)));
-        let mut beat = tokio::time::interval(config.heartbeat);
-        beat.tick().await;
-        let mut lease = Lease::Held;
-        let mut stopping = false;
-        let outcome = loop {
-            tokio::select! {
-                done = &mut simulation => break done,
-                _ = beat.tick() => {
-                    match store.heartbeat(&job.job_id, &config.owner, config.lease).await {
-                        Ok(Lease::Held) => {}
-                        Ok(other) => { lease = other; stop.store(true, Ordering::Relaxed); }
-                        Err(e) => tracing::warn!(job = %job.job_id, "heartbeat failed: {e}"),
-                    }
-                }
-                _ = shutdown.changed(), if !stopping => {
-                    if *shutdown.borrow() {
-                        stopping = true;
-                        stop.store(true, Ordering::Relaxed);
-                    }
-                }
-            }
-        };
-
-        let report = match outcome {
-            Ok(Ok(report)) => report,
-            Ok(Err(invalid)) => {
-                let _ = store
-                    .fail(
-                        &job.job_id,
-                        &config.owner,
-                        &format!("invalid scene: {invalid}"),
-                    )
-                    .await;
-                tally.failed += 1;
-                continue;
-            }
-            Err(panic) => {
-                let _ = store
-                    .fail(
-                        &job.job_id,
-                        &config.owner,
-                        &format!("the engine panicked: {panic}"),
-                    )
-                    .await;
-                tally.failed += 1;
-                continue;
-            }
-        };
-
-        if stop.load(Ordering::Relaxed)
-            || matches!(report.outcome, repose_physics::Outcome::Cancelled { .. })
-        {
-            if lease != Lease::Lost
-                && store
-                    .release(&job.job_id, &config.owner)
-                    .await
-                    .unwrap_or(false)
-            {
-                tally.released += 1;
-            } else {
-                tally.lost += 1;
-            }
-            tracing::info!(job = %job.job_id, "handed back");
-            continue;
+/// Runs one claimed job to its end: a stored result, a job handed back, a
+/// lost lease, or a failure with its reason.
+async fn work(
+    store: &Store,
+    config: &WorkerConfig,
+    job: &Claim,
+    shutdown: &mut watch::Receiver<bool>,
+) -> Ending {
+    let scene = match serde_json::from_str::<serde_json::Value>(&job.scene)
+        .map_err(|e| e.to_string())
+        .and_then(|v| Scene::from_stored(v).map_err(|e| e.to_string()))
+    {
+        Ok(s) => s,
+        Err(reason) => {
+            return give_up(store, config, job, format!("unreadable scene: {reason}")).await
         }
-        let record = match record(&report) {
-            Ok(r) => r,
-            Err(e) => {
-                let _ = store
-                    .fail(
-                        &job.job_id,
-                        &config.owner,
-                        &format!("unwritable report: {e}"),
-                    )
-                    .await;
-                tally.failed += 1;
-                continue;
-            }
+    };
+    let (outcome, stopped, lease) = run_leased(store, config, job, scene, shutdown).await;
+    let report = match outcome {
+        Ok(Ok(report)) => report,
+        Ok(Err(invalid)) => {
+            return give_up(store, config, job, format!("invalid scene: {invalid}")).await
+        }
+        Err(panic) => {
+            return give_up(store, config, job, format!("the engine panicked: {panic}")).await
+        }
+    };
+    if stopped || matches!(report.outcome, repose_physics::Outcome::Cancelled { .. }) {
+        tracing::info!(job = %job.job_id, "handed back");
+        let released = lease != Lease::Lost
+            && store
+                .release(&job.job_id, &config.owner)
+                .await
+                .unwrap_or(false);
+        return if released {
+            Ending::Released
+        } else {
+            Ending::Lost
         };
-        match store
-            .complete(&job.job_id, &config.owner, &job.sample_hash, &record)
-            .await
-        {
-            Ok(true) => tally.completed += 1,
-            Ok(false) => {
-                tally.lost += 1;
-                tracing::warn!(job = %job.job_id, "lease lost before completion; result not written");
-            }
-            Err(e) => {
-                tally.lost += 1;
-                tracing::warn!(job = %job.job_id, "could not store the result: {e}");
-            }
+    }
+    let record = match record(&report) {
+        Ok(r) => r,
+        Err(e) => return give_up(store, config, job, format!("unwritable report: {e}")).await,
+    };
+    match store
+        .complete(&job.job_id, &config.owner, &job.sample_hash, &record)
+        .await
+    {
+        Ok(true) => Ending::Completed,
+        Ok(false) => {
+            tracing::warn!(job = %job.job_id, "lease lost before completion; result not written");
+            Ending::Lost
+        }
+        Err(e) => {
+            tracing::warn!(job = %job.job_id, "could not store the result: {e}");
+            Ending::Lost
         }
     }
+}
+
+/// The engine's answer for a job.
+type RunAnswer = Result<Result<RunReport, SceneError>, tokio::task::JoinError>;
+
+/// Runs the scene on a blocking thread while renewing the lease; stops it
+/// when the lease is lost, the sweep cancelled or the worker asked to shut
+/// down. Returns the engine's answer, whether it was stopped, and the lease.
+async fn run_leased(
+    store: &Store,
+    config: &WorkerConfig,
+    job: &Claim,
+    scene: Scene,
+    shutdown: &mut watch::Receiver<bool>,
+) -> (RunAnswer, bool, Lease) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let mut simulation =
+        tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut StopFlag(flag)));
+    let mut beat = tokio::time::interval(config.heartbeat);
+    beat.tick().await;
+    let mut lease = Lease::Held;
+    let mut stopping = false;
+    let outcome = loop {
+        tokio::select! {
+            done = &mut simulation => break done,
+            _ = beat.tick() => {
+                match store.heartbeat(&job.job_id, &config.owner, config.lease).await {
+                    Ok(Lease::Held) => {}
+                    Ok(other) => { lease = other; stop.store(true, Ordering::Relaxed); }
+                    Err(e) => tracing::warn!(job = %job.job_id, "heartbeat failed: {e}"),
+                }
+            }
+            _ = shutdown.changed(), if !stopping => {
+                if *shutdown.borrow() {
+                    stopping = true;
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+        }
+    };
+    (outcome, stop.load(Ordering::Relaxed), lease)
 }
 
 /// What the store keeps of a report: its outcome, metrics and cost, and

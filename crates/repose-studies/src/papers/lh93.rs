@@ -170,25 +170,42 @@ const EQ4: &str = "θ_T from eq. (4) with the measured θ_R";
 const MU: &str = "friction coefficient μ";
 const THETA_R: &str = "θ_R, method 3 (°)";
 
+const OURS: &str = "ours, mean ± sd";
+const THETA_R_METRIC: &[&str] = &["theta_r"];
+const THETA_T_METRIC: &[&str] = &["theta_t"];
+
 fn figures() -> Vec<Figure> {
-    let ours = "ours, mean ± sd";
-    let theta_r: &'static [&'static str] = &["theta_r"];
-    let theta_t: &'static [&'static str] = &["theta_t"];
-    let on_mu = |y, label| Layer::Measured {
+    let [f2a, f2b, f5] = box_figures();
+    let [f3, f4, f7a, f7b] = friction_figures();
+    let [fk, fg] = sensitivity_figures();
+    vec![f2a, f2b, f3, f4, f5, f7a, f7b, fk, fg]
+}
+
+/// A metric of the fig. 3/4/7 sweep against μ.
+fn on_mu(y: &'static [&'static str], label: &'static str) -> Layer {
+    Layer::Measured {
         sweep: "fig347",
         x: "contact.mu",
         series: None,
         y,
         label,
-    };
-    let eq4_layer = Layer::AtPoints {
+    }
+}
+
+/// Eq. (4) at the measured θ_R of each μ.
+fn eq4_layer() -> Layer {
+    Layer::AtPoints {
         sweep: "fig347",
         x: "contact.mu",
         input: "theta_r",
         label: EQ4,
         f: eq4,
-    };
-    vec![
+    }
+}
+
+/// Figures 2a and 2b (the box) and 5 (constant flux).
+fn box_figures() -> [Figure; 3] {
+    [
         Figure {
             key: "2a",
             title: "θ_R against the box height H (W = 2, μ = 0.2)",
@@ -200,8 +217,8 @@ fn figures() -> Vec<Figure> {
                 sweep: "fig2a",
                 x: "box.height",
                 series: None,
-                y: theta_r,
-                label: ours,
+                y: THETA_R_METRIC,
+                label: OURS,
             }],
         },
         Figure {
@@ -215,34 +232,9 @@ fn figures() -> Vec<Figure> {
                 sweep: "fig2b",
                 x: "box.width",
                 series: Some("contact.mu"),
-                y: theta_r,
-                label: ours,
+                y: THETA_R_METRIC,
+                label: OURS,
             }],
-        },
-        Figure {
-            key: "3",
-            title: "θ_R against μ (W = H = 4)",
-            caption: "θ_R against μ, with eq. (3) and the paper's quoted value at μ = 0.2.",
-            x_label: MU,
-            y_label: THETA_R,
-            log_x: false,
-            layers: vec![
-                on_mu(theta_r, ours),
-                Layer::Curve { label: EQ3, f: eq3 },
-                Layer::Quoted {
-                    label: "paper, μ = 0.2",
-                    points: &QUOTED_FIG3,
-                },
-            ],
-        },
-        Figure {
-            key: "4",
-            title: "θ_T against μ (W = H = 4)",
-            caption: "θ_T against μ, with eq. (4) evaluated at our measured mean θ_R.",
-            x_label: MU,
-            y_label: "θ_T (°)",
-            log_x: false,
-            layers: vec![on_mu(theta_t, ours), eq4_layer.clone()],
         },
         Figure {
             key: "5",
@@ -265,69 +257,104 @@ fn figures() -> Vec<Figure> {
                 },
             ],
         },
-        Figure {
-            key: "7a",
-            title: "θ_R + θ_T against θ_MS = atan(3μ)",
-            caption: "θ_R + θ_T measured on the same piles, against eq. (3).",
-            x_label: MU,
-            y_label: "angle (°)",
-            log_x: false,
-            layers: vec![
+    ]
+}
+
+/// Figures 3, 4, 7a and 7b: the angles against μ with the theory of section 6.
+fn friction_figures() -> [Figure; 4] {
+    let figure = |key, title, caption, y_label, layers| Figure {
+        key,
+        title,
+        caption,
+        x_label: MU,
+        y_label,
+        log_x: false,
+        layers,
+    };
+    [
+        figure(
+            "3",
+            "θ_R against μ (W = H = 4)",
+            "θ_R against μ, with eq. (3) and the paper's quoted value at μ = 0.2.",
+            THETA_R,
+            vec![
+                on_mu(THETA_R_METRIC, OURS),
+                Layer::Curve { label: EQ3, f: eq3 },
+                Layer::Quoted {
+                    label: "paper, μ = 0.2",
+                    points: &QUOTED_FIG3,
+                },
+            ],
+        ),
+        figure(
+            "4",
+            "θ_T against μ (W = H = 4)",
+            "θ_T against μ, with eq. (4) evaluated at our measured mean θ_R.",
+            "θ_T (°)",
+            vec![on_mu(THETA_T_METRIC, OURS), eq4_layer()],
+        ),
+        figure(
+            "7a",
+            "θ_R + θ_T against θ_MS = atan(3μ)",
+            "θ_R + θ_T measured on the same piles, against eq. (3).",
+            "angle (°)",
+            vec![
                 on_mu(&["theta_r", "theta_t"], "ours, θ_R + θ_T"),
                 Layer::Curve { label: EQ3, f: eq3 },
             ],
+        ),
+        figure(
+            "7b",
+            "θ_T measured and from eq. (4)",
+            "θ_T measured against eq. (4) from the measured θ_R.",
+            "θ_T (°)",
+            vec![on_mu(THETA_T_METRIC, "measured"), eq4_layer()],
+        ),
+    ]
+}
+
+/// θ_R against stiffness and damping (section 4) with the paper's values.
+fn sensitivity_figures() -> [Figure; 2] {
+    let figure = |key, axis, label, quoted: &'static [(f64, f64, f64)], what| Figure {
+        key,
+        title: if key == "k_n" {
+            "θ_R against k_n (μ = 0.2)"
+        } else {
+            "θ_R against γ_n (μ = 0.2)"
         },
-        Figure {
-            key: "7b",
-            title: "θ_T measured and from eq. (4)",
-            caption: "θ_T measured against eq. (4) from the measured θ_R.",
-            x_label: MU,
-            y_label: "θ_T (°)",
-            log_x: false,
-            layers: vec![on_mu(theta_t, "measured"), eq4_layer],
-        },
-        Figure {
-            key: "k_n",
-            title: "θ_R against k_n (μ = 0.2)",
-            caption: "θ_R at three stiffnesses, with the paper's quoted values.",
-            x_label: "k_n (dyn/cm^1.5)",
-            y_label: THETA_R,
-            log_x: true,
-            layers: vec![
-                Layer::Measured {
-                    sweep: "k_n",
-                    x: "contact.k_n",
-                    series: None,
-                    y: theta_r,
-                    label: ours,
-                },
-                Layer::Quoted {
-                    label: "paper",
-                    points: &QUOTED_K_N,
-                },
-            ],
-        },
-        Figure {
-            key: "gamma_n",
-            title: "θ_R against γ_n (μ = 0.2)",
-            caption: "θ_R at three dampings, with the paper's quoted values.",
-            x_label: "γ_n (1/s)",
-            y_label: THETA_R,
-            log_x: true,
-            layers: vec![
-                Layer::Measured {
-                    sweep: "gamma_n",
-                    x: "contact.gamma_n",
-                    series: None,
-                    y: theta_r,
-                    label: ours,
-                },
-                Layer::Quoted {
-                    label: "paper",
-                    points: &QUOTED_GAMMA_N,
-                },
-            ],
-        },
+        caption: what,
+        x_label: label,
+        y_label: THETA_R,
+        log_x: true,
+        layers: vec![
+            Layer::Measured {
+                sweep: key,
+                x: axis,
+                series: None,
+                y: THETA_R_METRIC,
+                label: OURS,
+            },
+            Layer::Quoted {
+                label: "paper",
+                points: quoted,
+            },
+        ],
+    };
+    [
+        figure(
+            "k_n",
+            "contact.k_n",
+            "k_n (dyn/cm^1.5)",
+            &QUOTED_K_N,
+            "θ_R at three stiffnesses, with the paper's quoted values.",
+        ),
+        figure(
+            "gamma_n",
+            "contact.gamma_n",
+            "γ_n (1/s)",
+            &QUOTED_GAMMA_N,
+            "θ_R at three dampings, with the paper's quoted values.",
+        ),
     ]
 }
 
