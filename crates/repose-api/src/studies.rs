@@ -2,7 +2,7 @@
 //! metrics, the papers' studies, their figures computed from stored data
 //! with theory curves, and the comparison with each paper's results.
 
-use crate::sweeps::{enqueue, points_of, require_sweep, Queued};
+use crate::sweeps::{enqueue, parse_body, points_of, require_sweep, Queued};
 use crate::{ApiError, ApiResult, AppState, ErrorBody};
 use axum::body::Bytes;
 use axum::extract::{Path, Query, State};
@@ -176,20 +176,7 @@ pub async fn queue(
     let request: QueueRequest = if body.iter().all(u8::is_ascii_whitespace) {
         QueueRequest::default()
     } else {
-        let value: Value = serde_json::from_slice(&body).map_err(|e| {
-            ApiError::field(
-                StatusCode::BAD_REQUEST,
-                "(body)",
-                format!("not valid JSON: {e}"),
-            )
-        })?;
-        serde_path_to_error::deserialize(value).map_err(|e| {
-            ApiError::field(
-                StatusCode::UNPROCESSABLE_ENTITY,
-                e.path().to_string(),
-                e.inner().to_string(),
-            )
-        })?
+        parse_body(&body)?
     };
     let spec = sweep.spec(
         p.key,

@@ -49,8 +49,8 @@ pub struct SeriesAnswer {
     pub points: Vec<SeriesPoint>,
 }
 
-/// Reads a sweep spec from a JSON body, naming the field of any type error.
-fn parse_spec(body: &[u8]) -> ApiResult<SweepSpec> {
+/// Reads a JSON body into `T`, naming the field of any type error.
+pub(crate) fn parse_body<T: serde::de::DeserializeOwned>(body: &[u8]) -> ApiResult<T> {
     let value: Value = serde_json::from_slice(body).map_err(|e| {
         ApiError::field(
             StatusCode::BAD_REQUEST,
@@ -112,7 +112,7 @@ pub async fn create_sweep(
     State(s): State<AppState>,
     body: Bytes,
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
-    let spec = parse_spec(&body)?;
+    let spec: SweepSpec = parse_body(&body)?;
     enqueue(&s.store, &spec).await
 }
 
@@ -211,13 +211,24 @@ pub async fn samples(
     let format = format_of(&q)?;
     let sweep = require_sweep(&s.store, &id).await?;
     let rows = s.store.samples(&id).await?;
-    Ok(match format {
-        Format::Json => Json(SampleList { samples: rows }).into_response(),
-        Format::Csv => csv_response(
-            &format!("samples-{id}.csv"),
-            repose_store::export::samples_csv(&rows, &declared(&sweep.protocol)),
-        ),
-    })
+    Ok(listing(format, &format!("samples-{id}.csv"), || {
+        let csv = repose_store::export::samples_csv(&rows, &declared(&sweep.protocol));
+        (SampleList { samples: rows }, csv)
+    }))
+}
+
+/// A listing as JSON or, with `?format=csv`, as a CSV download; `make`
+/// gives both forms.
+fn listing<T: Serialize>(
+    format: Format,
+    file: &str,
+    make: impl FnOnce() -> (T, String),
+) -> Response {
+    let (json, csv) = make();
+    match format {
+        Format::Json => Json(json).into_response(),
+        Format::Csv => csv_response(file, csv),
+    }
 }
 
 /// A sweep's points, with every metric its protocol declares (n = 0 where
@@ -245,13 +256,10 @@ pub async fn points(
     let format = format_of(&q)?;
     let sweep = require_sweep(&s.store, &id).await?;
     let rows = points_of(&s.store, &sweep).await?;
-    Ok(match format {
-        Format::Json => Json(PointList { points: rows }).into_response(),
-        Format::Csv => csv_response(
-            &format!("points-{id}.csv"),
-            repose_store::export::points_csv(&rows, &declared(&sweep.protocol)),
-        ),
-    })
+    Ok(listing(format, &format!("points-{id}.csv"), || {
+        let csv = repose_store::export::points_csv(&rows, &declared(&sweep.protocol));
+        (PointList { points: rows }, csv)
+    }))
 }
 
 #[derive(Deserialize, utoipa::IntoParams)]

@@ -165,6 +165,20 @@ where
         self.next_id = self.next_id.max(id + 1);
     }
 
+    /// Numbers the grains 0, 1, 2, … unless their ids are already unique
+    /// (listed grains may all leave `id` at its default).
+    pub fn make_ids_unique(&mut self) {
+        let mut ids = self.id.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        if ids.len() != self.len() {
+            for (k, id) in self.id.iter_mut().enumerate() {
+                *id = k as u32;
+            }
+            self.next_id = self.len() as u32;
+        }
+    }
+
     /// Removes every grain whose flag is set, keeping the order of the rest
     /// (order matters: pair lists sorted by index stay sorted after remapping).
     pub fn retain(&mut self, keep: &[bool]) {

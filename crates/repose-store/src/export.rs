@@ -78,14 +78,15 @@ pub fn samples_csv(samples: &[Sample], metrics: &[String]) -> String {
             s.reason.clone().unwrap_or_default(),
         ]);
         row.extend(metrics.iter().map(|m| cell(s.metrics.get(m).copied())));
+        let c = &s.counts;
         row.extend([
-            s.grains_initial.to_string(),
-            s.grains_final.to_string(),
-            s.grains_lost.to_string(),
-            s.iterations.to_string(),
-            s.simulated_time.to_string(),
-            s.wall_time.to_string(),
-            s.particle_steps.to_string(),
+            c.grains_initial.to_string(),
+            c.grains_final.to_string(),
+            c.grains_lost.to_string(),
+            c.iterations.to_string(),
+            c.simulated_time.to_string(),
+            c.wall_time.to_string(),
+            c.particle_steps.to_string(),
             s.engine.clone(),
             s.sample_hash.clone(),
         ]);
@@ -140,13 +141,15 @@ mod tests {
             outcome: "failed".into(),
             reason: Some("flow: grain 3 \"ran\", far".into()),
             metrics: BTreeMap::from([("theta_x".to_string(), 1.5)]),
-            grains_initial: 1,
-            grains_final: 1,
-            grains_lost: 0,
-            iterations: 10,
-            simulated_time: 0.1,
-            wall_time: 0.01,
-            particle_steps: 10,
+            counts: crate::RunCounts {
+                grains_initial: 1,
+                grains_final: 1,
+                grains_lost: 0,
+                iterations: 10,
+                simulated_time: 0.1,
+                wall_time: 0.01,
+                particle_steps: 10,
+            },
             engine: "e".into(),
         };
         let text = samples_csv(&[sample], &["theta_r".to_string()]);

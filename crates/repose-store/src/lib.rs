@@ -101,6 +101,21 @@ pub struct NewJob {
     pub scene: serde_json::Value,
 }
 
+/// What a run took and left: grain counts, steps and times.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct RunCounts {
+    pub grains_initial: i64,
+    pub grains_final: i64,
+    pub grains_lost: i64,
+    pub iterations: i64,
+    /// Simulated time, s.
+    pub simulated_time: f64,
+    /// Wall-clock time of the run, s.
+    pub wall_time: f64,
+    /// Grains × steps the run took.
+    pub particle_steps: i64,
+}
+
 /// What a finished sample stores: its outcome, its metrics by name, what it
 /// cost, and the full report as a document.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,13 +125,7 @@ pub struct ResultRecord {
     pub outcome: String,
     pub reason: Option<String>,
     pub metrics: BTreeMap<String, f64>,
-    pub grains_initial: i64,
-    pub grains_final: i64,
-    pub grains_lost: i64,
-    pub iterations: i64,
-    pub simulated_time: f64,
-    pub wall_time: f64,
-    pub particle_steps: i64,
+    pub counts: RunCounts,
     /// The full report (JSON text).
     pub report: String,
 }
@@ -304,14 +313,8 @@ pub struct Sample {
     pub reason: Option<String>,
     /// The metrics this sample measured, by name.
     pub metrics: BTreeMap<String, f64>,
-    pub grains_initial: i64,
-    pub grains_final: i64,
-    pub grains_lost: i64,
-    pub iterations: i64,
-    pub simulated_time: f64,
-    pub wall_time: f64,
-    /// Grains × steps the run took.
-    pub particle_steps: i64,
+    #[serde(flatten)]
+    pub counts: RunCounts,
     pub engine: String,
 }
 

@@ -2,7 +2,9 @@
 //! metrics, and per-point statistics computed in the database from counts,
 //! sums and sums of squares of the metric rows.
 
-use crate::{parse_point, Aggregate, Cost, Point, Progress, Result, Sample, Store, SweepInfo};
+use crate::{
+    parse_point, Aggregate, Cost, Point, Progress, Result, RunCounts, Sample, Store, SweepInfo,
+};
 use serde::{Deserialize, Serialize};
 use sqlx::Row;
 use std::collections::{BTreeMap, HashMap};
@@ -160,13 +162,15 @@ impl Store {
                     seed: r.get("seed"),
                     outcome: r.get("outcome"),
                     reason: r.get("reason"),
-                    grains_initial: r.get("grains_initial"),
-                    grains_final: r.get("grains_final"),
-                    grains_lost: r.get("grains_lost"),
-                    iterations: r.get("iterations"),
-                    simulated_time: r.get("simulated_time"),
-                    wall_time: r.get("wall_time"),
-                    particle_steps: r.get("particle_steps"),
+                    counts: RunCounts {
+                        grains_initial: r.get("grains_initial"),
+                        grains_final: r.get("grains_final"),
+                        grains_lost: r.get("grains_lost"),
+                        iterations: r.get("iterations"),
+                        simulated_time: r.get("simulated_time"),
+                        wall_time: r.get("wall_time"),
+                        particle_steps: r.get("particle_steps"),
+                    },
                     engine: r.get("engine"),
                 })
             })

@@ -3,7 +3,7 @@
 //! `CI=true` the PostgreSQL tests fail when the server is unreachable;
 //! elsewhere they say so and skip.
 
-use repose_store::{Lease, NewJob, NewSweep, ResultRecord, Store};
+use repose_store::{Lease, NewJob, NewSweep, ResultRecord, RunCounts, Store};
 use serde_json::json;
 use std::collections::{BTreeMap, HashSet};
 use std::sync::{Arc, Mutex};
@@ -20,13 +20,15 @@ fn record(outcome: &str, metrics: &[(&str, f64)]) -> ResultRecord {
             .iter()
             .map(|(k, v)| (k.to_string(), *v))
             .collect::<BTreeMap<_, _>>(),
-        grains_initial: 10,
-        grains_final: 8,
-        grains_lost: 2,
-        iterations: 100,
-        simulated_time: 0.1,
-        wall_time: 0.01,
-        particle_steps: 1000,
+        counts: RunCounts {
+            grains_initial: 10,
+            grains_final: 8,
+            grains_lost: 2,
+            iterations: 100,
+            simulated_time: 0.1,
+            wall_time: 0.01,
+            particle_steps: 1000,
+        },
         report: json!({"outcome": {"status": outcome}}).to_string(),
     }
 }

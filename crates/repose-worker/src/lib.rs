@@ -14,7 +14,7 @@
 //! that cannot even be read marks the job failed.
 
 use repose_physics::{Observer, Progress, RunReport, Scene, SceneError};
-use repose_store::{Claim, Lease, ResultRecord, Store};
+use repose_store::{Claim, Lease, ResultRecord, RunCounts, Store};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -241,13 +241,15 @@ pub fn record(report: &RunReport) -> Result<ResultRecord, serde_json::Error> {
         outcome: report.outcome.status().to_string(),
         reason: report.outcome.reason(),
         metrics: report.metrics.clone(),
-        grains_initial: count(report.grains.initial),
-        grains_final: count(report.grains.remaining),
-        grains_lost: count(report.grains.lost),
-        iterations: i64::try_from(report.iterations).unwrap_or(i64::MAX),
-        simulated_time: report.simulated_time,
-        wall_time: report.wall_time,
-        particle_steps: i64::try_from(report.particle_steps).unwrap_or(i64::MAX),
+        counts: RunCounts {
+            grains_initial: count(report.grains.initial),
+            grains_final: count(report.grains.remaining),
+            grains_lost: count(report.grains.lost),
+            iterations: i64::try_from(report.iterations).unwrap_or(i64::MAX),
+            simulated_time: report.simulated_time,
+            wall_time: report.wall_time,
+            particle_steps: i64::try_from(report.particle_steps).unwrap_or(i64::MAX),
+        },
         report: serde_json::to_string(report)?,
     })
 }

@@ -7,11 +7,9 @@ use super::runner::Findings;
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
 use crate::integrate::Integrator;
-use crate::models::{self, lee_herrmann, EngineJob, Laws};
-use crate::preset::Preset;
+use crate::models::{self, EngineJob, Laws};
 use crate::report::{Outcome, RunReport};
-use crate::scene::{Checks, Scene, SceneError, SectionDecl};
-use serde_json::Value;
+use crate::scene::{Scene, SceneError, SectionDecl};
 
 pub struct FillRelease;
 
@@ -49,13 +47,7 @@ impl Protocol for FillRelease {
         "fill a box, remove its right wall, measure the angle of repose θ_R"
     }
 
-    fn dimensions(&self) -> &'static [usize] {
-        &[2]
-    }
-
-    fn models(&self) -> &'static [&'static str] {
-        &[lee_herrmann::NAME]
-    }
+    pile::pile_protocol!(filled: true);
 
     fn sections(&self) -> Vec<SectionDecl> {
         vec![
@@ -66,18 +58,6 @@ impl Protocol for FillRelease {
 
     fn metrics(&self) -> &'static [Metric] {
         &REPOSE_METRICS
-    }
-
-    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
-        pile::preset(preset)
-    }
-
-    fn check(&self, scene: &Scene, c: &mut Checks) {
-        pile::check(scene, true, c);
-    }
-
-    fn resolve(&self, scene: &mut Scene) {
-        pile::resolve(scene);
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {

@@ -10,9 +10,8 @@ use crate::contact::ContactLaw;
 use crate::dim::Vector;
 use crate::integrate::Integrator;
 use crate::measure::Stats;
-use crate::models::{self, lee_herrmann, EngineJob, Laws};
+use crate::models::{self, EngineJob, Laws};
 use crate::particles::Particles;
-use crate::preset::Preset;
 use crate::report::{Band, Curve, Outcome, Phase, Quantity, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
 use crate::setup::{sphere_mass, Stream};
@@ -103,13 +102,7 @@ impl Protocol for Flux {
         "add grains one at a time to an open pile: the angle of marginal stability θ_MS"
     }
 
-    fn dimensions(&self) -> &'static [usize] {
-        &[2]
-    }
-
-    fn models(&self) -> &'static [&'static str] {
-        &[lee_herrmann::NAME]
-    }
+    pile::pile_protocol!(filled: false);
 
     fn sections(&self) -> Vec<SectionDecl> {
         vec![
@@ -121,18 +114,6 @@ impl Protocol for Flux {
 
     fn metrics(&self) -> &'static [Metric] {
         &METRICS
-    }
-
-    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
-        pile::preset(preset)
-    }
-
-    fn check(&self, scene: &Scene, c: &mut Checks) {
-        pile::check(scene, false, c);
-    }
-
-    fn resolve(&self, scene: &mut Scene) {
-        pile::resolve(scene);
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {

@@ -134,15 +134,7 @@ where
             particles.omega[last] = w;
         }
     }
-    // Explicit ids may repeat the default 0: renumber if they are not unique.
-    let mut ids = particles.id.clone();
-    ids.sort_unstable();
-    ids.dedup();
-    if ids.len() != particles.len() {
-        for (k, id) in particles.id.iter_mut().enumerate() {
-            *id = k as u32;
-        }
-    }
+    particles.make_ids_unique();
     let mut walls: Vec<(Wall<D>, L)> = Vec::new();
     for (i, w) in scene.walls.iter().enumerate() {
         let wall = w.to_wall::<D>().ok_or_else(|| {
@@ -155,15 +147,5 @@ where
     }
     let gravity = vector_from::<D>(&scene.gravity)
         .ok_or_else(|| SceneError::single("gravity", format!("needs {D} components")))?;
-    let dt = scene.time_step();
-    let mut sim = Simulation::new(
-        particles,
-        walls,
-        gravity,
-        laws.pair,
-        dt,
-        scene.numerics.skin,
-    );
-    sim.guards.max_overlap = scene.numerics.max_overlap;
-    Ok(sim)
+    Ok(super::runner::engine(scene, particles, walls, gravity, laws.pair))
 }

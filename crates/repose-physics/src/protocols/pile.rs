@@ -188,6 +188,34 @@ impl Section for Equilibrium {
     }
 }
 
+/// The methods the three pile protocols share: 2D, Lee & Herrmann's model,
+/// the pile presets, the box checks (`filled`: the grains must fit in the
+/// box) and the resolved grain count and height.
+macro_rules! pile_protocol {
+    (filled: $filled:expr) => {
+        fn dimensions(&self) -> &'static [usize] {
+            &[2]
+        }
+
+        fn models(&self) -> &'static [&'static str] {
+            &[$crate::models::lee_herrmann::NAME]
+        }
+
+        fn preset(&self, preset: $crate::preset::Preset) -> Vec<(&'static str, serde_json::Value)> {
+            $crate::protocols::pile::preset(preset)
+        }
+
+        fn check(&self, scene: &$crate::scene::Scene, c: &mut $crate::scene::Checks) {
+            $crate::protocols::pile::check(scene, $filled, c);
+        }
+
+        fn resolve(&self, scene: &mut $crate::scene::Scene) {
+            $crate::protocols::pile::resolve(scene);
+        }
+    };
+}
+pub(crate) use pile_protocol;
+
 /// The settings the fidelity presets give the pile protocols.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     let mut v = super::numeric_preset(preset);
@@ -258,15 +286,7 @@ pub fn listed_grains(scene: &Scene, density: f64) -> Particles<2> {
         };
         particles.push_with_id(g.id, x, v, g.radius, sphere_mass(density, g.radius));
     }
-    // Explicit ids may repeat the default 0: renumber if they are not unique.
-    let mut ids = particles.id.clone();
-    ids.sort_unstable();
-    ids.dedup();
-    if ids.len() != particles.len() {
-        for (k, id) in particles.id.iter_mut().enumerate() {
-            *id = k as u32;
-        }
-    }
+    particles.make_ids_unique();
     particles
 }
 
@@ -354,17 +374,7 @@ pub fn engine<L: ContactLaw<2>, I: Integrator<2>>(
     laws: Laws<L>,
 ) -> Simulation<2, L, I> {
     let gravity = Vector::<2>::new(scene.gravity[0], scene.gravity[1]);
-    let dt = scene.time_step();
-    let mut sim = Simulation::new(
-        particles,
-        walls,
-        gravity,
-        laws.pair,
-        dt,
-        scene.numerics.skin,
-    );
-    sim.guards.max_overlap = scene.numerics.max_overlap;
-    sim
+    super::runner::engine(scene, particles, walls, gravity, laws.pair)
 }
 
 /// A pile protocol in progress.

@@ -11,7 +11,8 @@ use crate::report::{
     RunReport, TracePoint, ENGINE,
 };
 use crate::scene::Scene;
-use crate::walls::WallSpec;
+use crate::particles::Particles;
+use crate::walls::{Wall, WallSpec};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -234,6 +235,23 @@ impl Findings {
     pub fn metric(&mut self, name: &str, value: f64) {
         self.metrics.insert(name.to_string(), value);
     }
+}
+
+/// An engine with the scene's time step, skin and overlap guard.
+pub fn engine<const D: usize, L: ContactLaw<D>, I: Integrator<D>>(
+    scene: &Scene,
+    particles: Particles<D>,
+    walls: Vec<(Wall<D>, L)>,
+    gravity: Vector<D>,
+    pair_law: L,
+) -> Simulation<D, L, I>
+where
+    Dim<D>: Space<D>,
+{
+    let dt = scene.time_step();
+    let mut sim = Simulation::new(particles, walls, gravity, pair_law, dt, scene.numerics.skin);
+    sim.guards.max_overlap = scene.numerics.max_overlap;
+    sim
 }
 
 /// The size of the region a set of grains and a box `[0, size]` span.

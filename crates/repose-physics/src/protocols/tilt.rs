@@ -9,12 +9,11 @@ use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
 use crate::dim::Vector;
 use crate::integrate::Integrator;
-use crate::models::{self, lee_herrmann, EngineJob, Laws};
-use crate::preset::Preset;
+use crate::models::{self, EngineJob, Laws};
 use crate::report::{Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::json;
 
 pub struct Tilt;
 
@@ -83,13 +82,7 @@ impl Protocol for Tilt {
         "fill and release, then tilt the pile until it moves: θ_R and the tilting angle θ_T"
     }
 
-    fn dimensions(&self) -> &'static [usize] {
-        &[2]
-    }
-
-    fn models(&self) -> &'static [&'static str] {
-        &[lee_herrmann::NAME]
-    }
+    pile::pile_protocol!(filled: true);
 
     fn sections(&self) -> Vec<SectionDecl> {
         vec![
@@ -101,18 +94,6 @@ impl Protocol for Tilt {
 
     fn metrics(&self) -> &'static [Metric] {
         &METRICS
-    }
-
-    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
-        pile::preset(preset)
-    }
-
-    fn check(&self, scene: &Scene, c: &mut Checks) {
-        pile::check(scene, true, c);
-    }
-
-    fn resolve(&self, scene: &mut Scene) {
-        pile::resolve(scene);
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
