@@ -81,7 +81,9 @@ fn check_path(key: &str) -> Result<(), DocError> {
 pub fn set(doc: &mut Doc, key: &str, value: Value) -> Result<(), DocError> {
     check_path(key)?;
     let parts: Vec<&str> = key.split('.').collect();
-    let (last, on_the_way) = parts.split_last().expect("a checked path has a segment");
+    let Some((last, on_the_way)) = parts.split_last() else {
+        return Err(DocError::new(key, "empty key"));
+    };
     let mut table = doc;
     for (k, part) in on_the_way.iter().enumerate() {
         let entry = table

@@ -287,9 +287,9 @@ fn measured(
                 })
                 .collect();
             points.sort_by(|a, b| a.x.total_cmp(&b.x));
-            let name = match (&value, series) {
-                (Some(v), Some(s)) => format!("{s} = {v}"),
-                _ => label.to_string(),
+            let name = match &value {
+                Some(v) => format!("{label} = {v}"),
+                None => label.to_string(),
             };
             SeriesData {
                 name,

@@ -652,7 +652,6 @@ impl Report {
             r.wall_time,
             r.particle_steps
         );
-        let _ = r;
         s
     }
 
@@ -719,12 +718,10 @@ impl Report {
             s.push('\n');
         }
 
-        let _ = r;
         s
     }
 
     fn sensitivities(&self) -> String {
-        let r = self.reference();
         let mut s = String::new();
         if self.rows(Group::Paper).next().is_some() {
             let paper_preset = self.find("paper");
@@ -754,7 +751,7 @@ impl Report {
                 let paper_shift = mean - 17.99;
                 let our_shift = match (o.repose, default_mean) {
                     (Some(a), Some(d)) => {
-                        let se = if std::ptr::eq(o, paper_preset.unwrap()) {
+                        let se = if paper_preset.is_some_and(|p| std::ptr::eq(o, p)) {
                             0.0
                         } else {
                             (a.sem * a.sem + d.sem * d.sem).sqrt()
@@ -778,12 +775,10 @@ impl Report {
             s.push('\n');
         }
 
-        let _ = r;
         s
     }
 
     fn slope_methods(&self) -> String {
-        let r = self.reference();
         let mut s = String::new();
         let _ = writeln!(s, "## The three slope methods\n");
         let _ = writeln!(
@@ -816,12 +811,10 @@ impl Report {
         }
         s.push('\n');
 
-        let _ = r;
         s
     }
 
     fn failures(&self) -> String {
-        let r = self.reference();
         let mut s = String::new();
         let failures: Vec<String> = self
             .cases
@@ -843,7 +836,6 @@ impl Report {
             }
             s.push('\n');
         }
-        let _ = r;
         s
     }
 

@@ -147,5 +147,7 @@ where
     }
     let gravity = vector_from::<D>(&scene.gravity)
         .ok_or_else(|| SceneError::single("gravity", format!("needs {D} components")))?;
-    Ok(super::runner::engine(scene, particles, walls, gravity, laws.pair))
+    Ok(super::runner::engine(
+        scene, particles, walls, gravity, laws.pair,
+    ))
 }

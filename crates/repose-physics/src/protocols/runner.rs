@@ -6,12 +6,12 @@ use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};
 use crate::engine::{Blowup, Simulation};
 use crate::integrate::Integrator;
+use crate::particles::Particles;
 use crate::report::{
     ContactForce, Curve, FinalState, GrainCounts, Options, Outcome, Phase, Profile, Quantity,
     RunReport, TracePoint, ENGINE,
 };
 use crate::scene::Scene;
-use crate::particles::Particles;
 use crate::walls::{Wall, WallSpec};
 use serde_json::Value;
 use std::collections::BTreeMap;

@@ -233,7 +233,7 @@ fn box_figures() -> [Figure; 3] {
                 x: "box.width",
                 series: Some("contact.mu"),
                 y: THETA_R_METRIC,
-                label: OURS,
+                label: "μ",
             }],
         },
         Figure {

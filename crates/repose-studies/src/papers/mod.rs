@@ -174,7 +174,8 @@ pub struct PaperSummary {
 #[derive(Debug, Clone)]
 pub enum Layer {
     /// Means of a metric (or the sum of several) along a swept axis, one
-    /// series per value of another axis if `series` is set.
+    /// series per value of another axis if `series` is set. The label names
+    /// the data, or with a series the symbol of its axis ("μ = 0.2").
     Measured {
         sweep: &'static str,
         x: &'static str,
