@@ -87,40 +87,7 @@ async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
     let series = measured["points"].as_array().unwrap();
     assert_eq!(series.len(), 2);
     for p in points["points"].as_array().unwrap() {
-        // recompute the statistics from the stored samples
-        let values: Vec<f64> = samples
-            .iter()
-            .filter(|s| s["point"] == p["point"])
-            .filter_map(|s| s["metrics"]["theta_r"].as_f64())
-            .collect();
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let m = &p["metrics"]["theta_r"];
-        assert_eq!(m["n"].as_f64().unwrap(), n);
-        assert!((m["mean"].as_f64().unwrap() - mean).abs() < 1e-9, "{p}");
-        assert!((m["sd"].as_f64().unwrap() - sd).abs() < 1e-9, "{p}");
-        assert!(
-            (m["sem"].as_f64().unwrap() - sd / n.sqrt()).abs() < 1e-9,
-            "{p}"
-        );
-        let on_figure = series
-            .iter()
-            .find(|s| s["x"] == p["point"]["contact.mu"])
-            .unwrap();
-        assert_eq!(on_figure["y"], m["mean"]);
-        assert_eq!(on_figure["sd"], m["sd"]);
-        // The figure carries the single samples behind each mean.
-        let mut drawn: Vec<f64> = on_figure["samples"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let mut stored = values.clone();
-        drawn.sort_by(f64::total_cmp);
-        stored.sort_by(f64::total_cmp);
-        assert_eq!(drawn, stored);
+        point_matches_its_samples(p, &samples, series);
     }
     // the physics came through: more friction, steeper pile
     assert!(
@@ -152,6 +119,43 @@ async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
         .await
         .unwrap();
     assert_eq!(again["reused"], 6, "{again}");
+}
+
+/// A point's statistics recomputed from its stored samples, and the same
+/// numbers (with the single samples) on the figure.
+fn point_matches_its_samples(p: &Value, samples: &[Value], series: &[Value]) {
+    let values: Vec<f64> = samples
+        .iter()
+        .filter(|s| s["point"] == p["point"])
+        .filter_map(|s| s["metrics"]["theta_r"].as_f64())
+        .collect();
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let m = &p["metrics"]["theta_r"];
+    assert_eq!(m["n"].as_f64().unwrap(), n);
+    assert!((m["mean"].as_f64().unwrap() - mean).abs() < 1e-9, "{p}");
+    assert!((m["sd"].as_f64().unwrap() - sd).abs() < 1e-9, "{p}");
+    assert!(
+        (m["sem"].as_f64().unwrap() - sd / n.sqrt()).abs() < 1e-9,
+        "{p}"
+    );
+    let on_figure = series
+        .iter()
+        .find(|s| s["x"] == p["point"]["contact.mu"])
+        .unwrap();
+    assert_eq!(on_figure["y"], m["mean"]);
+    assert_eq!(on_figure["sd"], m["sd"]);
+    let mut drawn: Vec<f64> = on_figure["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let mut stored = values;
+    drawn.sort_by(f64::total_cmp);
+    stored.sort_by(f64::total_cmp);
+    assert_eq!(drawn, stored);
 }
 
 /// Cheap jobs: one grain dropped on a floor for a few milliseconds.

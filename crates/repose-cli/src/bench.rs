@@ -5,7 +5,7 @@
 //! side by side; `--lammps FILE` reads that run's CSV and prints the ratio.
 
 use anyhow::Context;
-use repose_physics::bench::throughput;
+use repose_physics::bench::{throughput, PhaseThroughput};
 use repose_physics::integrate::Scheme;
 use repose_physics::Scene;
 use std::collections::HashMap;
@@ -112,6 +112,32 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         Some(p) => read_lammps(p)?,
         None => HashMap::new(),
     };
+    let rows = match measure_sizes(&args)? {
+        Ok(rows) => rows,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return Ok(ExitCode::from(2));
+        }
+    };
+    if args.json {
+        let out: Vec<_> = rows
+            .iter()
+            .map(|(size, scheme, p)| serde_json::json!({ "size": size, "integrator": scheme, "result": p }))
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print_table(&rows, &lammps);
+        print_scheme_ratios(&rows);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One measured phase: box size, integrator name, its throughput.
+type Row = (f64, &'static str, PhaseThroughput);
+
+/// Measures every size with every integrator; the inner error is a scene
+/// the options make invalid.
+fn measure_sizes(args: &BenchArgs) -> anyhow::Result<Result<Vec<Row>, String>> {
     let mut rows = Vec::new();
     for &size in &args.sizes {
         for integrator in &args.integrators {
@@ -130,30 +156,20 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             let scene = match Scene::from_toml("protocol = \"fill_release\"\nseed = 1", &overrides)
             {
                 Ok(s) => s,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return Ok(ExitCode::from(2));
-                }
+                Err(e) => return Ok(Err(e.to_string())),
             };
             let (settled, flow) = steps_for(size);
             let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
             eprintln!("measuring W = H = {size}, {} ...", scheme.name());
-            let phases = throughput(&scene, scale(settled), scale(flow))?;
-            for p in phases {
+            for p in throughput(&scene, scale(settled), scale(flow))? {
                 rows.push((size, scheme.name(), p));
             }
         }
     }
+    Ok(Ok(rows))
+}
 
-    if args.json {
-        let out: Vec<_> = rows
-            .iter()
-            .map(|(size, scheme, p)| serde_json::json!({ "size": size, "integrator": scheme, "result": p }))
-            .collect();
-        println!("{}", serde_json::to_string_pretty(&out)?);
-        return Ok(ExitCode::SUCCESS);
-    }
-
+fn print_table(rows: &[Row], lammps: &HashMap<(String, String), f64>) {
     println!(
         "{:<8} {:<7} {:<8} {:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
         "scene",
@@ -170,7 +186,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         "ratio"
     );
     println!("{:<53}   {:^31}", "", "ns per particle-step, by stage");
-    for (size, scheme, p) in &rows {
+    for (size, scheme, p) in rows {
         let c = &p.counters;
         let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
         let key = (format!("{size:.0}"), p.phase.to_string());
@@ -197,25 +213,27 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             ratio
         );
     }
-    let pairs: Vec<(f64, &str)> = rows
-        .iter()
-        .filter(|(_, s, _)| *s == "gear5")
-        .map(|(size, _, p)| (*size, p.phase))
-        .collect();
-    for (size, phase) in pairs {
-        let find = |scheme: &str| {
-            rows.iter()
-                .find(|(s, sc, p)| *s == size && *sc == scheme && p.phase == phase)
-                .map(|(_, _, p)| p.particle_steps_per_second)
-        };
-        if let (Some(g), Some(v)) = (find("gear5"), find("verlet")) {
+}
+
+/// Gear-5 against Verlet for each size and phase measured with both.
+fn print_scheme_ratios(rows: &[Row]) {
+    let find = |size: f64, scheme: &str, phase: &str| {
+        rows.iter()
+            .find(|(s, sc, p)| *s == size && *sc == scheme && p.phase == phase)
+            .map(|(_, _, p)| p.particle_steps_per_second)
+    };
+    for (size, _, p) in rows.iter().filter(|(_, s, _)| *s == "gear5") {
+        if let (Some(g), Some(v)) = (
+            find(*size, "gear5", p.phase),
+            find(*size, "verlet", p.phase),
+        ) {
             println!(
-                "W=H={size} {phase}: Gear-5 costs {:.2}× Verlet per particle-step",
+                "W=H={size} {}: Gear-5 costs {:.2}× Verlet per particle-step",
+                p.phase,
                 v / g
             );
         }
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// One row of the LAMMPS peer CSV (the columns this benchmark reads).
