@@ -16,29 +16,40 @@ use std::process::ExitCode;
 pub struct BenchArgs {
     /// Box sizes W = H to measure.
     #[arg(long, value_delimiter = ',', default_values_t = vec![4.0, 8.0])]
-    sizes: Vec<f64>,
+    pub sizes: Vec<f64>,
     /// Integrators to measure.
     #[arg(long, value_delimiter = ',', default_values = ["verlet", "gear5"])]
-    integrators: Vec<String>,
+    pub integrators: Vec<String>,
     /// Time step, s (LAMMPS peer runs use 1e-5).
     #[arg(long, default_value_t = 1e-5)]
-    dt: f64,
+    pub dt: f64,
     /// Scale the step counts (1 = the LAMMPS runs' counts).
     #[arg(long, default_value_t = 1.0)]
-    scale: f64,
+    pub scale: f64,
     /// Extra scene overrides, e.g. --set contact.shear_spring=truncated.
     #[arg(long = "set", value_name = "KEY=VALUE")]
-    set: Vec<String>,
+    pub set: Vec<String>,
     /// CSV written by the LAMMPS peer benchmark (throughput_lammps.csv).
     #[arg(long)]
-    lammps: Option<PathBuf>,
+    pub lammps: Option<PathBuf>,
     /// Print JSON instead of the table.
     #[arg(long)]
-    json: bool,
+    pub json: bool,
     /// Instead: the cost of each physics option, per particle-step, on the
-    /// W = H = 4 scene with Verlet (each option against the same baseline).
+    /// W = H = 4 scene with Verlet (each option against the same baseline);
+    /// with --heap, of each 3D option on the heap.
     #[arg(long)]
-    options: bool,
+    pub options: bool,
+    /// Instead: the 3D heap of the LIGGGHTS peer run (2000 spheres, poured
+    /// then settled).
+    #[arg(long)]
+    pub heap: bool,
+    /// CSV written by the LIGGGHTS peer benchmark (throughput_liggghts.csv).
+    #[arg(long)]
+    pub liggghts: Option<PathBuf>,
+    /// Threads per simulation (results are the same for any number).
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
 }
 
 /// The physics options a scene can switch, each measured against the baseline.
@@ -105,6 +116,9 @@ fn steps_for(size: f64) -> (u64, u64) {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    if args.heap {
+        return crate::bench3d::heap(&args);
+    }
     if args.options {
         return option_costs(&args);
     }

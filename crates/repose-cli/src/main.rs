@@ -13,6 +13,7 @@
 //! ```
 
 mod bench;
+mod bench3d;
 mod bench_service;
 mod output;
 mod reproduce;

@@ -33,6 +33,7 @@ pub trait Space<const D: usize>: 'static {
         + Send
         + Sync
         + Add<Output = Self::Shear>
+        + Sub<Output = Self::Shear>
         + Mul<f64, Output = Self::Shear>;
 
     /// The tangential part of `v` for a contact with unit normal `n`.
@@ -47,6 +48,9 @@ pub trait Space<const D: usize>: 'static {
 
     /// Length of a shear quantity.
     fn magnitude(s: Self::Shear) -> f64;
+
+    /// Squared length of a shear quantity.
+    fn magnitude_squared(s: Self::Shear) -> f64;
 
     /// An angular velocity or torque: a scalar about the out-of-plane axis
     /// in 2D, a vector in 3D.
@@ -110,6 +114,11 @@ impl Space<2> for Dim<2> {
     fn follow_normal(s: f64, _n: &Vector<2>) -> f64 {
         // A scalar along `s` turns with the contact by construction.
         s
+    }
+
+    #[inline(always)]
+    fn magnitude_squared(s: f64) -> f64 {
+        s * s
     }
 
     #[inline(always)]
@@ -177,17 +186,22 @@ impl Space<3> for Dim<3> {
 
     #[inline(always)]
     fn follow_normal(s: Vector<3>, n: &Vector<3>) -> Vector<3> {
-        let len = s.norm();
-        if len == 0.0 {
+        let along = s.dot(n);
+        if along == 0.0 {
             return s;
         }
-        let projected = s - n * s.dot(n);
-        let plen = projected.norm();
-        if plen == 0.0 {
-            Vector::<3>::zeros()
-        } else {
-            projected * (len / plen)
+        // |s − (s·n) n|² = |s|² − (s·n)²: one square root rescales it.
+        let len2 = s.norm_squared();
+        let plen2 = len2 - along * along;
+        if plen2 <= 0.0 {
+            return Vector::<3>::zeros();
         }
+        (s - n * along) * (len2 / plen2).sqrt()
+    }
+
+    #[inline(always)]
+    fn magnitude_squared(s: Vector<3>) -> f64 {
+        s.norm_squared()
     }
 
     #[inline(always)]

@@ -12,8 +12,13 @@
 //! A contact law that acts across gaps (cohesion) has a range: pairs whose
 //! gap is below `range + skin` enter the list, so every pair within range
 //! is always listed.
+//!
+//! With periodic axes the grains near a face are also binned as images
+//! shifted by one period, and a pair found through an image keeps that
+//! shift: the pair's separation is `x_i − x_j − shift`.
 
 use crate::dim::{Dim, Space, Vector};
+use crate::engine::Periodic;
 use crate::particles::Particles;
 
 /// Verlet pair list with one contact-history slot per pair.
@@ -25,12 +30,21 @@ pub struct NeighborList<const D: usize, H> {
     pub pairs: Vec<[u32; 2]>,
     /// Contact history of each pair; `H::default()` when not touching.
     pub history: Vec<H>,
+    /// Image shift of each pair across periodic faces (empty without them).
+    pub shifts: Vec<Vector<D>>,
+    /// The pairs of each grain, in list order (built on request, for
+    /// summing forces grain by grain in parallel): `incidence[start[i]..start[i + 1]]`
+    /// holds `2k` where grain `i` is the first of pair `k`, `2k + 1` where it is the second.
+    pub incidence: Vec<u32>,
+    pub incidence_start: Vec<u32>,
     /// How many times the list was built.
     pub builds: u64,
     anchor: Vec<Vector<D>>,
     grid: CellGrid<D>,
-    scratch: Vec<u32>,
+    scratch: Vec<(u32, Vector<D>)>,
     merged: Vec<([u32; 2], H)>,
+    images: Vec<Vector<D>>,
+    image_of: Vec<(u32, Vector<D>)>,
 }
 
 impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
@@ -39,11 +53,16 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
             skin,
             pairs: Vec::new(),
             history: Vec::new(),
+            shifts: Vec::new(),
+            incidence: Vec::new(),
+            incidence_start: Vec::new(),
             builds: 0,
             anchor: Vec::new(),
             grid: CellGrid::default(),
             scratch: Vec::new(),
             merged: Vec::new(),
+            images: Vec::new(),
+            image_of: Vec::new(),
         }
     }
 
@@ -68,24 +87,32 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
     /// Removal preserves order, so the list stays sorted.
     pub fn renumber(&mut self, new_index: &[u32]) {
         let mut out = 0;
+        let periodic = !self.shifts.is_empty();
         for k in 0..self.pairs.len() {
             let [i, j] = self.pairs[k];
             let (ni, nj) = (new_index[i as usize], new_index[j as usize]);
             if ni != u32::MAX && nj != u32::MAX {
                 self.pairs[out] = [ni, nj];
                 self.history[out] = self.history[k];
+                if periodic {
+                    self.shifts[out] = self.shifts[k];
+                }
                 out += 1;
             }
         }
         self.pairs.truncate(out);
         self.history.truncate(out);
+        self.shifts.truncate(out.min(self.shifts.len()));
+        self.incidence.clear();
+        self.incidence_start.clear();
         self.anchor.clear();
     }
 
     /// Rebuilds the list from the current positions, keeping every live
     /// contact history. `range` is the largest gap across which the
-    /// contact law acts (0 for contact-only laws).
-    pub fn rebuild(&mut self, p: &Particles<D>, range: f64)
+    /// contact law acts (0 for contact-only laws); `periodic` the periodic
+    /// axes, whose positions must already be wrapped into the cell.
+    pub fn rebuild(&mut self, p: &Particles<D>, range: f64, periodic: Option<&Periodic<D>>)
     where
         Dim<D>: Space<D>,
     {
@@ -98,29 +125,82 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         }
 
         let max_radius = p.radius.iter().copied().fold(0.0, f64::max);
-        self.grid.bin(&p.pos, 2.0 * max_radius + range + self.skin);
-
+        let cell = 2.0 * max_radius + range + self.skin;
+        self.collect_images(p, periodic, cell);
         self.pairs.clear();
-        let skin = self.skin;
-        for i in 0..p.len() {
-            self.scratch.clear();
-            let xi = p.pos[i];
-            let ri = p.radius[i];
-            let scratch = &mut self.scratch;
-            self.grid.for_each_near(i, |j| {
-                if j as usize > i {
-                    let reach = ri + p.radius[j as usize] + range + skin;
-                    if (xi - p.pos[j as usize]).norm_squared() < reach * reach {
-                        scratch.push(j);
-                    }
-                }
-            });
-            self.scratch.sort_unstable();
+        self.shifts.clear();
+        let n = p.len();
+        for i in 0..n {
+            self.near_pairs(p, i, range);
+            self.scratch.sort_unstable_by_key(|e| e.0);
             self.pairs
-                .extend(self.scratch.iter().map(|&j| [i as u32, j]));
+                .extend(self.scratch.iter().map(|&(j, _)| [i as u32, j]));
+            if periodic.is_some() {
+                self.shifts.extend(self.scratch.iter().map(|e| e.1));
+            }
         }
+        self.hand_over_springs();
+        self.anchor.clear();
+        self.anchor.extend_from_slice(&p.pos);
+        self.incidence.clear();
+        self.incidence_start.clear();
+        self.builds += 1;
+    }
 
-        // Hand the live springs to the new list (both sequences are sorted).
+    /// Bins the grains, and with periodic axes their images near the faces.
+    fn collect_images(&mut self, p: &Particles<D>, periodic: Option<&Periodic<D>>, cell: f64)
+    where
+        Dim<D>: Space<D>,
+    {
+        self.images.clear();
+        self.image_of.clear();
+        let Some(per) = periodic else {
+            self.grid.bin(&p.pos, cell);
+            return;
+        };
+        self.images.extend_from_slice(&p.pos);
+        for (j, x) in p.pos.iter().enumerate() {
+            per.for_each_image(x, cell, |shift| {
+                self.images.push(x + shift);
+                self.image_of.push((j as u32, shift));
+            });
+        }
+        self.grid.bin(&self.images, cell);
+    }
+
+    /// Fills `scratch` with the partners `j > i` of grain `i` within reach,
+    /// each with the shift of the image it was found through.
+    fn near_pairs(&mut self, p: &Particles<D>, i: usize, range: f64)
+    where
+        Dim<D>: Space<D>,
+    {
+        self.scratch.clear();
+        let n = p.len();
+        let xi = p.pos[i];
+        let ri = p.radius[i];
+        let skin = self.skin;
+        let scratch = &mut self.scratch;
+        let image_of = &self.image_of;
+        let images = &self.images;
+        self.grid.for_each_near(i, |e| {
+            let e = e as usize;
+            let (j, shift, xj) = if e < n {
+                (e, Vector::<D>::zeros(), p.pos[e])
+            } else {
+                let (j, shift) = image_of[e - n];
+                (j as usize, shift, images[e])
+            };
+            if j > i {
+                let reach = ri + p.radius[j] + range + skin;
+                if (xi - xj).norm_squared() < reach * reach {
+                    scratch.push((j as u32, shift));
+                }
+            }
+        });
+    }
+
+    /// Hands the live springs to the new list (both sequences are sorted).
+    fn hand_over_springs(&mut self) {
         self.history.clear();
         self.history.resize(self.pairs.len(), H::default());
         let mut k = 0;
@@ -132,10 +212,33 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
                 self.history[k] = *h;
             }
         }
+    }
 
-        self.anchor.clear();
-        self.anchor.extend_from_slice(&p.pos);
-        self.builds += 1;
+    /// Builds [`NeighborList::incidence`] for `n` grains, if not built since
+    /// the list last changed.
+    pub fn build_incidence(&mut self, n: usize) {
+        if self.incidence_start.len() == n + 1 {
+            return;
+        }
+        self.incidence_start.clear();
+        self.incidence_start.resize(n + 1, 0);
+        for [i, j] in &self.pairs {
+            self.incidence_start[*i as usize + 1] += 1;
+            self.incidence_start[*j as usize + 1] += 1;
+        }
+        for c in 0..n {
+            self.incidence_start[c + 1] += self.incidence_start[c];
+        }
+        let mut fill = self.incidence_start.clone();
+        self.incidence.clear();
+        self.incidence.resize(2 * self.pairs.len(), 0);
+        for (k, [i, j]) in self.pairs.iter().enumerate() {
+            for (g, side) in [(*i, 0), (*j, 1)] {
+                let slot = &mut fill[g as usize];
+                self.incidence[*slot as usize] = 2 * k as u32 + side;
+                *slot += 1;
+            }
+        }
     }
 }
 

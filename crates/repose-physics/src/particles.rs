@@ -24,6 +24,10 @@ pub struct Grain {
     /// three in 3D; zero if not given. Only simulations with rotation use it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub angular_velocity: Vec<f64>,
+    /// A constant external force on the grain besides gravity (a load to
+    /// pull or press with); none if not given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub load: Vec<f64>,
     pub radius: f64,
 }
 
@@ -68,6 +72,9 @@ where
     pub torque: Vec<<Dim<D> as Space<D>>::Angular>,
     /// `1 / I` with the sphere's `I = 2/5 m a²` (empty unless the grains rotate).
     pub inv_inertia: Vec<f64>,
+    /// Constant external force on each grain besides gravity (empty unless
+    /// some grain carries one: see [`Particles::set_load`]).
+    pub load: Vec<Vector<D>>,
     rotating: bool,
     next_id: u32,
 }
@@ -98,6 +105,7 @@ where
             omega: Vec::new(),
             torque: Vec::new(),
             inv_inertia: Vec::new(),
+            load: Vec::new(),
             rotating,
             next_id: 0,
         }
@@ -162,7 +170,18 @@ where
             self.torque.push(Default::default());
             self.inv_inertia.push(1.0 / (0.4 * mass * radius * radius));
         }
+        if !self.load.is_empty() {
+            self.load.push(Vector::zeros());
+        }
         self.next_id = self.next_id.max(id + 1);
+    }
+
+    /// Puts a constant external force on grain `i`.
+    pub fn set_load(&mut self, i: usize, force: Vector<D>) {
+        if self.load.is_empty() {
+            self.load.resize(self.len(), Vector::zeros());
+        }
+        self.load[i] = force;
     }
 
     /// Numbers the grains 0, 1, 2, … unless their ids are already unique
@@ -201,6 +220,9 @@ where
             filter(&mut self.omega, keep);
             filter(&mut self.torque, keep);
             filter(&mut self.inv_inertia, keep);
+        }
+        if !self.load.is_empty() {
+            filter(&mut self.load, keep);
         }
     }
 
@@ -248,6 +270,11 @@ where
                     .omega
                     .get(i)
                     .map(|w| <Dim<D> as Space<D>>::angular_components(*w))
+                    .unwrap_or_default(),
+                load: self
+                    .load
+                    .get(i)
+                    .map(|f| f.iter().copied().collect())
                     .unwrap_or_default(),
                 radius: self.radius[i],
             })

@@ -252,7 +252,11 @@ fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
 /// SHA-256 of the canonical JSON of a resolved scene (keys sorted) and the
 /// engine version: the identity of a sample.
 pub fn sample_hash(scene: &Scene) -> String {
-    let canonical = serde_json::to_value(scene).unwrap_or(Value::Null);
+    let mut canonical = serde_json::to_value(scene).unwrap_or(Value::Null);
+    // Threads change the speed of a sample, never its numbers.
+    if let Some(numerics) = canonical.get_mut("numerics").and_then(Value::as_object_mut) {
+        numerics.remove("threads");
+    }
     let mut h = Sha256::new();
     h.update(ENGINE.as_bytes());
     h.update([0u8]);

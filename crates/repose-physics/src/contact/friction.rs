@@ -18,7 +18,7 @@ where
         Default::default()
     }
 
-    fn elastic_energy(&self, _history: &()) -> f64 {
+    fn elastic_energy(&self, _history: &(), _touch: &Touch<D>) -> f64 {
         0.0
     }
 }
@@ -82,7 +82,7 @@ where
         static_force + tangential_velocity * (-self.gamma_s * touch.m_eff)
     }
 
-    fn elastic_energy(&self, history: &Self::History) -> f64 {
+    fn elastic_energy(&self, history: &Self::History, _touch: &Touch<D>) -> f64 {
         let s = <Dim<D> as Space<D>>::magnitude(history.displacement);
         0.5 * self.k_s * s * s
     }

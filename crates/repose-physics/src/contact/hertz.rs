@@ -38,7 +38,7 @@ impl<const FLOOR: bool> NormalLaw for HertzDamped<FLOOR> {
         self.magnitude(touch.overlap, normal_speed, touch.m_eff)
     }
 
-    fn elastic_energy(&self, overlap: f64) -> f64 {
+    fn elastic_energy(&self, overlap: f64, _r_eff: f64) -> f64 {
         0.4 * self.k_n * overlap * overlap * overlap.sqrt()
     }
 }

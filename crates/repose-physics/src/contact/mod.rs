@@ -15,11 +15,18 @@
 //! force acts on `i` (its opposite acts on `j`). A wall is a grain `j` of zero
 //! radius, infinite mass and no rotation, so `m_e = m_i`.
 
+mod cohesion;
 mod friction;
 mod hertz;
+pub mod restitution;
+mod rolling;
+mod viscoelastic;
 
+pub use cohesion::VanDerWaals;
 pub use friction::{CundallStrack, Frictionless, ShearSpring};
 pub use hertz::HertzDamped;
+pub use rolling::{Epsd2, RollingSpring};
+pub use viscoelastic::{Cap, MindlinSpring, TangentialSpring, ViscoelasticHertz};
 
 use crate::dim::{Dim, Space, Vector};
 use std::fmt::Debug;
@@ -101,8 +108,8 @@ pub trait NormalLaw: Copy + Send + Sync + Debug {
     fn force<const D: usize>(&self, touch: &Touch<D>, normal_speed: f64) -> f64
     where
         Dim<D>: Space<D>;
-    /// Elastic energy stored at this overlap.
-    fn elastic_energy(&self, overlap: f64) -> f64;
+    /// Elastic energy stored at this overlap, for a pair of effective radius `r_eff`.
+    fn elastic_energy(&self, overlap: f64, r_eff: f64) -> f64;
 }
 
 /// The tangential component, with whatever per-contact memory it needs.
@@ -126,7 +133,7 @@ where
     ) -> Shear<D>;
 
     /// Energy stored in the contact's spring.
-    fn elastic_energy(&self, history: &Self::History) -> f64;
+    fn elastic_energy(&self, history: &Self::History, touch: &Touch<D>) -> f64;
 }
 
 /// Resistance to rolling: a torque opposing the relative rotation.
@@ -226,8 +233,8 @@ where
     /// Largest gap across which the law acts (0 for contact-only laws).
     fn range(&self) -> f64;
 
-    /// Elastic energy held by one contact.
-    fn elastic_energy(&self, overlap: f64, history: &Self::History) -> f64;
+    /// Elastic energy held by one touching pair.
+    fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64;
 }
 
 /// Components acting together: normal, tangential, rolling and cohesion,
@@ -314,8 +321,9 @@ where
         }
     }
 
-    fn elastic_energy(&self, overlap: f64, history: &Self::History) -> f64 {
-        self.normal.elastic_energy(overlap) + self.tangential.elastic_energy(&history.0)
+    fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64 {
+        self.normal.elastic_energy(touch.overlap, touch.r_eff)
+            + self.tangential.elastic_energy(&history.0, touch)
     }
 }
 

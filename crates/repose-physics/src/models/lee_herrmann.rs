@@ -8,6 +8,7 @@ use super::{select, EngineJob, Laws, Model};
 use crate::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
 use crate::dim::{Dim, Space};
 use crate::doc::Doc;
+use crate::engine::Units;
 use crate::integrate::{Gear5, Scheme, VelocityVerlet};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use crate::setup::sphere_mass;
@@ -392,7 +393,11 @@ impl Model for LeeHerrmann {
         ]
     }
 
-    fn defaults(&self, dimension: usize) -> Doc {
+    fn units(&self) -> Units {
+        Units::CGS
+    }
+
+    fn defaults(&self, dimension: usize, _doc: &Doc) -> Doc {
         let gravity = if dimension == 3 {
             json!([0.0, 0.0, -981.0])
         } else {

@@ -11,11 +11,13 @@
 //! Adding a model is its own module plus one line in [`MODELS`] (and one in
 //! the [`Models`] impl of each dimension it has).
 
+pub mod elekes_parteli;
 pub mod lee_herrmann;
 
 use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space};
 use crate::doc::Doc;
+use crate::engine::Units;
 use crate::integrate::Integrator;
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};
 use std::collections::BTreeMap;
@@ -28,10 +30,13 @@ pub trait Model: Sync {
     fn about(&self) -> &'static str;
     /// The dimensions it has a form for.
     fn dimensions(&self) -> &'static [usize];
+    /// The units its sections and results are in.
+    fn units(&self) -> Units;
     /// The sections it owns.
     fn sections(&self) -> Vec<SectionDecl>;
-    /// Core values it sets where a document is silent (gravity, numerics).
-    fn defaults(&self, dimension: usize) -> Doc;
+    /// Core values it sets where a document is silent (gravity, numerics),
+    /// given the document as written.
+    fn defaults(&self, dimension: usize, doc: &Doc) -> Doc;
     /// Checks across its sections and the core.
     fn check(&self, scene: &Scene, c: &mut Checks);
     /// Writes out the values derived from others.
@@ -45,7 +50,7 @@ pub trait Model: Sync {
 }
 
 /// Every contact model, by name. Registering a model is one line here.
-pub static MODELS: &[&dyn Model] = &[&lee_herrmann::LeeHerrmann];
+pub static MODELS: &[&dyn Model] = &[&lee_herrmann::LeeHerrmann, &elekes_parteli::ElekesParteli];
 
 /// The model of this name.
 pub fn find(name: &str) -> Option<&'static dyn Model> {
@@ -95,6 +100,7 @@ impl Models<3> for Dim<3> {
     fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
         match scene.model.as_str() {
             lee_herrmann::NAME => lee_herrmann::with_engine(scene, job),
+            elekes_parteli::NAME => elekes_parteli::with_engine(scene, job),
             other => Err(no_form(other, 3)),
         }
     }

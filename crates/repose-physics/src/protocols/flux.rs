@@ -178,7 +178,7 @@ impl EngineJob<2> for Job<'_> {
             ),
         ];
         let mut sim = pile::engine::<L, I>(self.scene, particles, walls, laws);
-        sim.outlet = Some(pile::open_side(width));
+        sim.outlets = vec![pile::open_side(width)];
         let mu = self.spec.mu;
         let mut pile = Pile::new(sim, self.scene, self.spec, self.observer);
         let (series, by_speed, stop) = feed(&mut pile, &self.flux);

@@ -8,7 +8,7 @@ use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};
 use crate::engine::Simulation;
 use crate::integrate::Integrator;
-use crate::models::{self, lee_herrmann, EngineJob, Laws, Models};
+use crate::models::{self, elekes_parteli, lee_herrmann, EngineJob, Laws, Models};
 use crate::particles::{vector_from, Particles};
 use crate::preset::Preset;
 use crate::report::{Outcome, Phase, RunReport};
@@ -38,7 +38,16 @@ impl Protocol for FreeRun {
     }
 
     fn models(&self) -> &'static [&'static str] {
-        &[lee_herrmann::NAME]
+        &[lee_herrmann::NAME, elekes_parteli::NAME]
+    }
+
+    /// Lee & Herrmann's discs in 2D, Elekes & Parteli's spheres in 3D.
+    fn default_model(&self, dimension: usize) -> &'static str {
+        if dimension == 3 {
+            elekes_parteli::NAME
+        } else {
+            lee_herrmann::NAME
+        }
     }
 
     fn sections(&self) -> Vec<SectionDecl> {
@@ -128,6 +137,11 @@ where
         let x = g.position_in::<D>().ok_or_else(bad)?;
         let v = g.velocity_in::<D>().ok_or_else(bad)?;
         particles.push_with_id(g.id, x, v, g.radius, sphere_mass(rho, g.radius));
+        if !g.load.is_empty() {
+            let f = vector_from::<D>(&g.load).ok_or_else(bad)?;
+            let last = particles.len() - 1;
+            particles.set_load(last, f);
+        }
         if L::ROTATES && !g.angular_velocity.is_empty() {
             let w = <Dim<D> as Space<D>>::angular_from(&g.angular_velocity).ok_or_else(bad)?;
             let last = particles.len() - 1;

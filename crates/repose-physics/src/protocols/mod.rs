@@ -12,7 +12,10 @@
 pub mod fill_release;
 pub mod flux;
 pub mod free_run;
+pub mod heap;
+pub mod packing;
 pub mod pile;
+pub mod pour;
 pub mod runner;
 pub mod tilt;
 
@@ -78,6 +81,8 @@ pub static PROTOCOLS: &[&dyn Protocol] = &[
     &tilt::Tilt,
     &flux::Flux,
     &free_run::FreeRun,
+    &heap::Heap,
+    &packing::Packing,
 ];
 
 /// All registered protocols.

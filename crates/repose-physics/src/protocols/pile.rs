@@ -437,7 +437,7 @@ impl<'a, L: ContactLaw<2>, I: Integrator<2>> Pile<'a, L, I> {
 
     pub fn open_right_side(&mut self) {
         self.run.sim.remove_wall(RIGHT_WALL);
-        self.run.sim.outlet = Some(open_side(self.spec.cell.width));
+        self.run.sim.outlets = vec![open_side(self.spec.cell.width)];
     }
 
     /// The outcome of a settling phase that stopped early.

@@ -251,6 +251,11 @@ where
     let dt = scene.time_step();
     let mut sim = Simulation::new(particles, walls, gravity, pair_law, dt, scene.numerics.skin);
     sim.guards.max_overlap = scene.numerics.max_overlap;
+    if let Ok(model) = scene.model() {
+        sim.units = model.units();
+    }
+    // A pool that cannot be built leaves the run on one thread: same results.
+    let _ = sim.set_threads(scene.numerics.threads);
     sim
 }
 

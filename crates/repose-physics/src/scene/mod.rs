@@ -139,7 +139,18 @@ pub struct Numerics {
     pub skin: f64,
     /// Largest overlap allowed, as a fraction of the smaller radius, before a run is failed.
     pub max_overlap: f64,
+    /// Threads computing the forces of one sample. Results are
+    /// bit-identical for any number, so it is not part of a sample's identity.
+    #[serde(skip_serializing_if = "is_one")]
+    pub threads: usize,
 }
+
+fn is_one(n: &usize) -> bool {
+    *n == 1
+}
+
+/// Most threads one sample may ask for.
+pub const MAX_THREADS: usize = 256;
 
 impl Default for Numerics {
     fn default() -> Self {
@@ -150,6 +161,7 @@ impl Default for Numerics {
             dt: None,
             skin: 0.04,
             max_overlap: 0.5,
+            threads: 1,
         }
     }
 }
@@ -267,7 +279,8 @@ impl Scene {
                 }
             }
         }
-        doc::merge_defaults(&mut d, &model.defaults(dimension));
+        let defaults = model.defaults(dimension, &d);
+        doc::merge_defaults(&mut d, &defaults);
         let mut core_doc = Doc::new();
         for key in CORE_KEYS {
             if let Some(v) = d.remove(key) {
@@ -367,6 +380,12 @@ impl Scene {
         }
         c.positive("numerics.skin", n.skin);
         c.positive("numerics.max_overlap", n.max_overlap);
+        if n.threads == 0 || n.threads > MAX_THREADS {
+            c.fail(
+                "numerics.threads",
+                format!("must lie between 1 and {MAX_THREADS}"),
+            );
+        }
         self.check_listed(c);
     }
 
@@ -388,6 +407,7 @@ impl Scene {
             c.positive(&format!("particles[{i}].radius"), p.radius);
             vector(c, format!("particles[{i}].position"), &p.position, false);
             vector(c, format!("particles[{i}].velocity"), &p.velocity, true);
+            vector(c, format!("particles[{i}].load"), &p.load, true);
             let spin = if d == 2 { 1 } else { 3 };
             if !p.angular_velocity.is_empty() && p.angular_velocity.len() != spin {
                 c.fail(
@@ -776,7 +796,12 @@ mod tests {
         let three = "protocol = \"free_run\"\ndimension = 3\nduration = 0.01\n\
                      [[particles]]\nposition = [0.0, 0.0, 0.2]\nradius = 0.1\n\
                      [[walls]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n";
+        // In 3D a free run takes Elekes & Parteli's spheres (SI), or Lee &
+        // Herrmann's law (CGS) when named.
         let s = Scene::from_toml(three, &[]).unwrap();
+        assert_eq!(s.model, "elekes_parteli");
+        assert_eq!(s.gravity, vec![0.0, 0.0, -9.81]);
+        let s = Scene::from_toml(three, &["model=\"lee_herrmann\"".into()]).unwrap();
         assert_eq!(s.gravity, vec![0.0, 0.0, -981.0]);
         let err = Scene::from_toml(
             three,

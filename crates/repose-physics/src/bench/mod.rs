@@ -1,8 +1,12 @@
-//! Throughput measurement on the fill-and-release scene: particle-steps per
-//! second of the settled pile (all walls, nothing moving) and of the flow
-//! right after the side wall is removed, with per-stage times.
+//! Throughput measurement: particle-steps per second, with per-stage
+//! times, on the fill-and-release scene of Lee & Herrmann (the settled pile
+//! with all walls, and the flow right after the side wall is removed) and
+//! on the poured 3D heap of the LIGGGHTS peer run ([`heap`]).
+
+pub mod heap;
 
 use crate::contact::ContactLaw;
+use crate::dim::{Dim, Space};
 use crate::engine::{Simulation, StageCounters};
 use crate::integrate::Integrator;
 use crate::models::{with_engine, EngineJob, Laws};
@@ -61,11 +65,15 @@ struct Job<'a> {
     flow_steps: u64,
 }
 
-fn timed<L: ContactLaw<2>, I: Integrator<2>>(
-    sim: &mut Simulation<2, L, I>,
+/// Runs `steps` steps and times them.
+pub fn timed<const D: usize, L: ContactLaw<D>, I: Integrator<D>>(
+    sim: &mut Simulation<D, L, I>,
     phase: &'static str,
     steps: u64,
-) -> Result<PhaseThroughput, String> {
+) -> Result<PhaseThroughput, String>
+where
+    Dim<D>: Space<D>,
+{
     sim.counters = StageCounters::default();
     let grains_start = sim.particles.len();
     let clock = Instant::now();

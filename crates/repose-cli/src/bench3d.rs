@@ -1,0 +1,174 @@
+//! `repose bench --heap`: particle-steps per second of the 3D heap of the
+//! LIGGGHTS peer run, pouring and settled, single thread by default, with
+//! the time of each stage; `--liggghts FILE` reads that run's CSV and
+//! prints the ratio. `--heap --options`: the cost of each 3D physics
+//! option on the same scene.
+
+use crate::bench::BenchArgs;
+use anyhow::Context;
+use repose_physics::bench::heap::{heap_throughput, HeapSteps, LIGGGHTS_HEAP};
+use repose_physics::bench::PhaseThroughput;
+use repose_physics::Scene;
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// The 3D options a scene can switch, each measured against the baseline.
+const OPTIONS: &[(&str, &[&str])] = &[
+    ("baseline: rotation, epsd2 rolling, no cohesion", &[]),
+    ("no rolling resistance", &["material.rolling=\"none\""]),
+    (
+        "no rotation (and so no rolling resistance)",
+        &["material.rotation=false", "material.rolling=\"none\""],
+    ),
+    (
+        "van der Waals cohesion (γ = 0.05 J/m²)",
+        &["material.surface_energy=0.05"],
+    ),
+    (
+        "Coulomb cap on spring and damper (the paper's)",
+        &["material.tangential_cap=\"total\""],
+    ),
+];
+
+fn scene(args: &BenchArgs, extra: &[&str]) -> anyhow::Result<Scene> {
+    let mut o: Vec<String> = args.set.clone();
+    o.extend(extra.iter().map(|s| s.to_string()));
+    o.push(format!("numerics.threads={}", args.threads));
+    Scene::from_toml(LIGGGHTS_HEAP, &o).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+fn steps(args: &BenchArgs) -> HeapSteps {
+    let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
+    let full = HeapSteps::default();
+    HeapSteps {
+        pour: scale(full.pour),
+        settle: scale(full.settle),
+        settled: scale(full.settled),
+    }
+}
+
+/// The heap benchmark against the peer run.
+pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    if args.options {
+        return options(args);
+    }
+    let peer = match &args.liggghts {
+        Some(p) => read_liggghts(p)?,
+        None => HashMap::new(),
+    };
+    eprintln!("pouring and settling the 2000-sphere heap ...");
+    let phases = heap_throughput(&scene(args, &[])?, steps(args))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&phases)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "{:<9} {:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
+        "phase",
+        "grains",
+        "steps",
+        "Mpsteps/s",
+        "neigh",
+        "contact",
+        "walls",
+        "integr",
+        "LIGGGHTS",
+        "ratio"
+    );
+    println!("{:<41}   {:^31}", "", "ns per particle-step, by stage");
+    for p in &phases {
+        print_row(p, peer.get(p.phase));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_row(p: &PhaseThroughput, peer: Option<&f64>) {
+    let c = &p.counters;
+    let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
+    let (peer, ratio) = match peer {
+        Some(v) => (
+            format!("{:.2}", v / 1e6),
+            format!("{:.2}×", p.particle_steps_per_second / v),
+        ),
+        None => ("-".into(), "-".into()),
+    };
+    println!(
+        "{:<9} {:>11} {:>7} {:>10.2}   {:>7.1} {:>7.1} {:>7.1} {:>7.1}  {:>9} {:>7}",
+        p.phase,
+        format!("{}→{}", p.grains_start, p.grains_end),
+        p.steps,
+        p.particle_steps_per_second / 1e6,
+        per(c.neighbours),
+        per(c.contacts),
+        per(c.walls),
+        per(c.integrate),
+        peer,
+        ratio
+    );
+}
+
+/// Particle-steps per second of each 3D option, pouring and settled.
+fn options(args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    println!(
+        "{:<50} {:>10} {:>8} {:>12} {:>8}",
+        "option (2000-sphere heap)", "pour M/s", "× base", "settled M/s", "× base"
+    );
+    let mut base: Option<(f64, f64)> = None;
+    for (label, overrides) in OPTIONS {
+        let phases = heap_throughput(&scene(args, overrides)?, steps(args))?;
+        let (pour, settled) = (
+            phases[0].particle_steps_per_second,
+            phases[1].particle_steps_per_second,
+        );
+        let (bp, bs) = *base.get_or_insert((pour, settled));
+        println!(
+            "{label:<50} {:>10.2} {:>8.2} {:>12.2} {:>8.2}",
+            pour / 1e6,
+            bp / pour,
+            settled / 1e6,
+            bs / settled
+        );
+    }
+    println!("(× base: cost per particle-step relative to the baseline; above 1 is slower)");
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One row of the LIGGGHTS peer CSV (the columns this benchmark reads).
+#[derive(serde::Deserialize)]
+struct LiggghtsRow {
+    rolling: String,
+    phase: String,
+    psteps_per_s_loop: f64,
+}
+
+/// Median particle-steps/s over LIGGGHTS's own loop time, per phase, of
+/// the `epsd2` rows (the rolling model of the paper and of this engine).
+fn read_liggghts(path: &Path) -> anyhow::Result<HashMap<&'static str, f64>> {
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut groups: HashMap<&'static str, Vec<f64>> = HashMap::new();
+    for row in reader.deserialize::<LiggghtsRow>() {
+        let row = row.with_context(|| {
+            format!(
+                "{} lacks the rolling, phase and psteps_per_s_loop columns",
+                path.display()
+            )
+        })?;
+        let phase = match row.phase.as_str() {
+            "pour" => "pour",
+            "settled" => "settled",
+            _ => continue,
+        };
+        if row.rolling == "epsd2" {
+            groups.entry(phase).or_default().push(row.psteps_per_s_loop);
+        }
+    }
+    Ok(groups
+        .into_iter()
+        .map(|(k, mut v)| {
+            v.sort_by(f64::total_cmp);
+            (k, v[v.len() / 2])
+        })
+        .collect())
+}

@@ -1,0 +1,77 @@
+//! Van der Waals attraction between spheres, Elekes & Parteli's eqs. (13)
+//! and (14).
+
+use super::{CohesionLaw, Touch};
+use crate::dim::{Dim, Space};
+
+/// `F = A_H R_eff / (6 (s + D_min)²)` across a gap `s` up to `D_max`,
+/// and its value at `s = 0` while the spheres touch (the attraction does not
+/// grow with the overlap). `A_H = 24π D_min² γ` for a surface energy `γ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VanDerWaals {
+    /// Hamaker constant `A_H`, J.
+    pub hamaker: f64,
+    /// Cut-off of the attraction at contact, `D_min`, m.
+    pub d_min: f64,
+    /// Largest gap across which it acts, `D_max`, m.
+    pub d_max: f64,
+}
+
+impl VanDerWaals {
+    /// The Hamaker constant of a surface energy `γ` (J/m²) with the cut-off `d_min`.
+    pub fn hamaker_of(surface_energy: f64, d_min: f64) -> f64 {
+        24.0 * std::f64::consts::PI * d_min * d_min * surface_energy
+    }
+
+    /// The attraction of two spheres of effective radius `r_eff` at a gap
+    /// `gap` (zero or negative while they touch), N.
+    #[inline(always)]
+    pub fn at(&self, r_eff: f64, gap: f64) -> f64 {
+        if gap > self.d_max {
+            return 0.0;
+        }
+        let s = gap.max(0.0) + self.d_min;
+        self.hamaker * r_eff / (6.0 * s * s)
+    }
+}
+
+impl<const D: usize> CohesionLaw<D> for VanDerWaals
+where
+    Dim<D>: Space<D>,
+{
+    const ACTIVE: bool = true;
+
+    fn range(&self) -> f64 {
+        self.d_max
+    }
+
+    #[inline(always)]
+    fn attraction(&self, touch: &Touch<D>) -> f64 {
+        self.at(touch.r_eff, -touch.overlap)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attraction_is_flat_in_contact_and_falls_as_the_inverse_square_of_the_gap() {
+        let a = VanDerWaals::hamaker_of(0.05, 1.65e-10);
+        assert!((a - 1.026e-19).abs() < 1e-22, "{a}");
+        let law = VanDerWaals {
+            hamaker: a,
+            d_min: 1.65e-10,
+            d_max: 1e-6,
+        };
+        let touching = law.at(2.5e-4, -1e-7);
+        assert_eq!(touching, law.at(2.5e-4, 0.0));
+        // π γ d for two spheres of diameter d (R_eff = d/4)
+        assert!((touching - std::f64::consts::PI * 0.05 * 1e-3).abs() < 1e-12);
+        let s = 1e-8;
+        let ratio = law.at(2.5e-4, s) / touching;
+        let expected = (1.65e-10 / (s + 1.65e-10)).powi(2);
+        assert!((ratio - expected).abs() < 1e-12 * expected.max(1e-30));
+        assert_eq!(law.at(2.5e-4, 1.1e-6), 0.0);
+    }
+}

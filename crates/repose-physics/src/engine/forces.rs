@@ -1,0 +1,376 @@
+//! The force stages: gravity, every listed pair, every wall contact.
+//!
+//! On one thread each pair's response is added to its two grains as it is
+//! computed. On several, the responses are computed in parallel into a
+//! buffer, and each grain then sums its own pairs in list order: the same
+//! additions in the same order, so the same bits.
+
+use super::{Blowup, Simulation};
+use crate::contact::{ContactLaw, Response, Touch};
+use crate::dim::{Dim, Space, Vector};
+use crate::integrate::Integrator;
+use crate::particles::Particles;
+use rayon::prelude::*;
+
+/// Pairs handed to a thread at a time.
+const PAIRS_PER_TASK: usize = 1024;
+
+/// Below this many listed pairs a step is too short to share: waking the
+/// other threads would cost more than it saves.
+const PARALLEL_PAIRS: usize = 8192;
+
+impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
+where
+    Dim<D>: Space<D>,
+{
+    /// The separation `x_i − x_j` of listed pair `k` (across a periodic
+    /// face if the list found it there).
+    #[inline(always)]
+    pub(super) fn separation(&self, k: usize, i: usize, j: usize) -> Vector<D> {
+        let r = self.particles.pos[i] - self.particles.pos[j];
+        if self.neighbors.shifts.is_empty() {
+            r
+        } else {
+            r - self.neighbors.shifts[k]
+        }
+    }
+
+    /// Gravity and every pair; fails if a pair overlaps beyond the guard.
+    pub(super) fn pair_forces(&mut self) -> Result<(), Blowup> {
+        let shared = self.pool.is_some() && self.neighbors.pairs.len() >= PARALLEL_PAIRS;
+        let worst = match (shared, self.periodic.is_some()) {
+            (true, _) => self.pair_forces_parallel(),
+            (false, false) => self.pair_forces_serial::<false>(),
+            (false, true) => self.pair_forces_serial::<true>(),
+        };
+        self.overlap_guard(worst)
+    }
+
+    /// Returns the largest overlap fraction and its pair.
+    fn pair_forces_serial<const PERIODIC: bool>(&mut self) -> (f64, usize) {
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            p.force[i] = self.gravity * p.mass[i];
+        }
+        for (f, load) in p.force.iter_mut().zip(&p.load) {
+            *f += load;
+        }
+        if L::ROTATES {
+            p.torque.fill(Default::default());
+        }
+        let law = self.pair_law;
+        let dt = self.dt;
+        let mut worst = (0.0f64, 0usize);
+        let nl = &mut self.neighbors;
+        let shifts = &nl.shifts;
+        for (k, (&[i, j], history)) in nl.pairs.iter().zip(nl.history.iter_mut()).enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            let r = if PERIODIC {
+                p.pos[i] - p.pos[j] - shifts[k]
+            } else {
+                p.pos[i] - p.pos[j]
+            };
+            if let Some((response, fraction)) = pair_response(&law, p, i, j, r, history, dt) {
+                if fraction > worst.0 {
+                    worst = (fraction, k);
+                }
+                apply(p, i, j, &response, L::ROTATES);
+            }
+        }
+        worst
+    }
+
+    /// The same on the thread pool.
+    fn pair_forces_parallel(&mut self) -> (f64, usize) {
+        let Some(pool) = self.pool.clone() else {
+            return self.pair_forces_serial::<false>();
+        };
+        let n = self.particles.len();
+        self.neighbors.build_incidence(n);
+        let Simulation {
+            particles: p,
+            neighbors: nl,
+            responses,
+            pair_law: law,
+            dt,
+            gravity,
+            ..
+        } = self;
+        let (law, dt, gravity) = (*law, *dt, *gravity);
+        responses.resize(nl.pairs.len(), None);
+        let (pairs, shifts) = (&nl.pairs, &nl.shifts);
+        let (incidence, start) = (&nl.incidence, &nl.incidence_start);
+        let history = &mut nl.history;
+        pool.install(|| {
+            let positions = &*p;
+            let worst = responses
+                .par_iter_mut()
+                .zip(history.par_iter_mut())
+                .enumerate()
+                .with_min_len(PAIRS_PER_TASK)
+                .map(|(k, (out, history))| {
+                    let [i, j] = pairs[k];
+                    let (i, j) = (i as usize, j as usize);
+                    let mut r = positions.pos[i] - positions.pos[j];
+                    if !shifts.is_empty() {
+                        r -= shifts[k];
+                    }
+                    let found = pair_response(&law, positions, i, j, r, history, dt);
+                    *out = found.map(|f| f.0);
+                    (found.map_or(0.0, |f| f.1), k)
+                })
+                .reduce(|| (0.0, usize::MAX), worse);
+            sum_by_grain(p, incidence, start, responses, gravity);
+            (worst.0, worst.1.min(pairs.len().saturating_sub(1)))
+        })
+    }
+
+    fn overlap_guard(&mut self, (worst, pair): (f64, usize)) -> Result<(), Blowup> {
+        self.max_overlap_seen = self.max_overlap_seen.max(worst);
+        if worst > self.guards.max_overlap {
+            let [a, b] = self.neighbors.pairs[pair];
+            return Err(Blowup::Overlap {
+                a: self.particles.id[a as usize],
+                b: self.particles.id[b as usize],
+                fraction: worst,
+                limit: self.guards.max_overlap,
+                time: self.time,
+            });
+        }
+        Ok(())
+    }
+
+    /// Every grain touching a wall.
+    pub(super) fn wall_forces(&mut self) -> Result<(), Blowup> {
+        let p = &mut self.particles;
+        let dt = self.dt;
+        for (w, wall) in self.walls.iter().enumerate() {
+            let law = self.wall_laws[w];
+            let cands = &self.wall_contacts.candidates[w];
+            let history = &mut self.wall_contacts.history[w];
+            for k in 0..cands.len() {
+                let i = cands[k] as usize;
+                let dist = wall.distance(&p.pos[i]);
+                let overlap = p.radius[i] - dist;
+                if overlap <= 0.0 || !wall.covers(&p.pos[i]) {
+                    history[k] = Default::default();
+                    continue;
+                }
+                if dist < 0.0 {
+                    return Err(Blowup::ThroughWall {
+                        id: p.id[i],
+                        wall: w,
+                        time: self.time,
+                    });
+                }
+                let fraction = overlap / p.radius[i];
+                self.max_overlap_seen = self.max_overlap_seen.max(fraction);
+                let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
+                let response = law.force(&touch, &mut history[k], dt);
+                p.force[i] += response.force;
+                if L::ROTATES {
+                    p.torque[i] += response.torque_i;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Normal force of every touching pair, for drawing force chains:
+    /// `(index i, index j, |F_n|)` with the elastic part only (the state is at rest).
+    pub fn contact_forces(&self) -> Vec<(usize, usize, f64)> {
+        let p = &self.particles;
+        let mut out = Vec::new();
+        for (k, [i, j]) in self.neighbors.pairs.iter().enumerate() {
+            let (i, j) = (*i as usize, *j as usize);
+            let r = self.separation(k, i, j);
+            let dist = r.norm();
+            let overlap = p.radius[i] + p.radius[j] - dist;
+            if overlap > 0.0 && dist > 0.0 {
+                let mut touch = pair_touch(p, i, j, r, dist, L::ROTATES);
+                touch.normal = r / dist;
+                let mut h = self.neighbors.history[k];
+                let f = self.pair_law.force(&touch, &mut h, 0.0).force;
+                out.push((i, j, f.dot(&touch.normal).abs()));
+            }
+        }
+        out
+    }
+}
+
+/// The larger overlap of two; on a tie the earlier pair, as one thread finds it.
+fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+        b
+    } else {
+        a
+    }
+}
+
+/// The response of pair `(i, j)` at separation `r` and its overlap as a
+/// fraction of the smaller radius, or `None` if it neither touches nor
+/// attracts across its gap (its history is then reset).
+#[inline(always)]
+fn pair_response<const D: usize, L: ContactLaw<D>>(
+    law: &L,
+    p: &Particles<D>,
+    i: usize,
+    j: usize,
+    r: Vector<D>,
+    history: &mut L::History,
+    dt: f64,
+) -> Option<(Response<D>, f64)>
+where
+    Dim<D>: Space<D>,
+{
+    let dist2 = r.norm_squared();
+    let reach = p.radius[i] + p.radius[j];
+    if dist2 >= reach * reach {
+        // The contact is open: its spring is gone.
+        *history = Default::default();
+        if L::ACTS_ACROSS_GAPS {
+            let limit = reach + law.range();
+            if dist2 < limit * limit {
+                let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
+                return Some((law.gap_force(&touch), 0.0));
+            }
+        }
+        return None;
+    }
+    let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
+    let fraction = touch.overlap / touch.radius_i.min(touch.radius_j);
+    Some((law.force(&touch, history, dt), fraction))
+}
+
+/// Each grain's force (gravity first) and torque from its pairs, in list order.
+fn sum_by_grain<const D: usize>(
+    p: &mut Particles<D>,
+    incidence: &[u32],
+    start: &[u32],
+    responses: &[Option<Response<D>>],
+    gravity: Vector<D>,
+) where
+    Dim<D>: Space<D>,
+{
+    let rotating = p.rotating();
+    let Particles {
+        force,
+        torque,
+        mass,
+        load,
+        ..
+    } = p;
+    let mine = |i: usize| &incidence[start[i] as usize..start[i + 1] as usize];
+    force.par_iter_mut().enumerate().for_each(|(i, f)| {
+        let mut sum = gravity * mass[i];
+        if let Some(load) = load.get(i) {
+            sum += load;
+        }
+        for &e in mine(i) {
+            if let Some(r) = &responses[(e / 2) as usize] {
+                if e % 2 == 0 {
+                    sum += r.force;
+                } else {
+                    sum -= r.force;
+                }
+            }
+        }
+        *f = sum;
+    });
+    if rotating {
+        torque.par_iter_mut().enumerate().for_each(|(i, t)| {
+            let mut sum = <Dim<D> as Space<D>>::Angular::default();
+            for &e in mine(i) {
+                if let Some(r) = &responses[(e / 2) as usize] {
+                    sum += if e % 2 == 0 { r.torque_i } else { r.torque_j };
+                }
+            }
+            *t = sum;
+        });
+    }
+}
+
+/// The pair `(i, j)` with `r = x_i − x_j` at distance `dist`, seen from `i`.
+#[inline(always)]
+pub(super) fn pair_touch<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    j: usize,
+    r: Vector<D>,
+    dist: f64,
+    rotating: bool,
+) -> Touch<D>
+where
+    Dim<D>: Space<D>,
+{
+    let (ai, aj) = (p.radius[i], p.radius[j]);
+    let (mi, mj) = (p.mass[i], p.mass[j]);
+    Touch {
+        normal: r * (1.0 / dist),
+        overlap: (ai + aj) - dist,
+        velocity: p.vel[i] - p.vel[j],
+        m_eff: mi * mj / (mi + mj),
+        r_eff: ai * aj / (ai + aj),
+        radius_i: ai,
+        radius_j: aj,
+        omega_i: if rotating {
+            p.omega[i]
+        } else {
+            Default::default()
+        },
+        omega_j: if rotating {
+            p.omega[j]
+        } else {
+            Default::default()
+        },
+    }
+}
+
+/// Grain `i` against a wall with unit normal `normal`: a partner of zero
+/// radius and infinite mass that does not turn.
+#[inline(always)]
+pub(super) fn wall_touch<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    normal: Vector<D>,
+    overlap: f64,
+    rotating: bool,
+) -> Touch<D>
+where
+    Dim<D>: Space<D>,
+{
+    Touch {
+        normal,
+        overlap,
+        velocity: p.vel[i],
+        m_eff: p.mass[i],
+        r_eff: p.radius[i],
+        radius_i: p.radius[i],
+        radius_j: 0.0,
+        omega_i: if rotating {
+            p.omega[i]
+        } else {
+            Default::default()
+        },
+        omega_j: Default::default(),
+    }
+}
+
+/// Adds a pair's response to both grains.
+#[inline(always)]
+fn apply<const D: usize>(
+    p: &mut Particles<D>,
+    i: usize,
+    j: usize,
+    response: &Response<D>,
+    rotating: bool,
+) where
+    Dim<D>: Space<D>,
+{
+    p.force[i] += response.force;
+    p.force[j] -= response.force;
+    if rotating {
+        p.torque[i] += response.torque_i;
+        p.torque[j] += response.torque_j;
+    }
+}

@@ -1,0 +1,484 @@
+//! The poured heap of Elekes & Parteli: grains rain from a narrow prism
+//! onto a square plate with open edges, and the angle of repose is read off
+//! the two side views of the settled heap.
+
+use super::pour::{self, Placer, Region, Scales};
+use super::runner::{Findings, Runner, Stop};
+use super::{Metric, Observer, Protocol};
+use crate::contact::ContactLaw;
+use crate::dim::Vector;
+use crate::engine::{Outlet, Simulation};
+use crate::integrate::Integrator;
+use crate::measure::Profile;
+use crate::models::elekes_parteli::{self, Grains};
+use crate::models::{self, EngineJob, Laws};
+use crate::particles::Particles;
+use crate::preset::Preset;
+use crate::report::{Curve, Outcome, Phase, RunReport};
+use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
+use crate::setup::Stream;
+use crate::walls::Wall;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+pub struct Heap;
+
+pub const POUR: Phase = Phase("pour");
+pub const SETTLE: Phase = Phase("settle");
+
+/// The pouring protocol, lengths in grain diameters `d` and times in `√(d/g)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HeapSpec {
+    /// Side of the square plate, d.
+    pub plate: f64,
+    /// Height of the domain above the plate, d.
+    pub height: f64,
+    /// Side of the square insertion prism, d.
+    pub inlet_width: f64,
+    /// Bottom of the insertion prism above the plate, d; once the heap is
+    /// taller, only the space above its crest is used.
+    pub inlet_floor: f64,
+    /// Solid fraction the prism is filled to at each insertion.
+    pub fill_fraction: f64,
+    /// Time between insertions, √(d/g).
+    pub interval: f64,
+    /// Grains poured at most.
+    pub max_grains: usize,
+    /// The heap is at rest when the translational kinetic energy per grain
+    /// is below this, in m g d.
+    pub rest_energy: f64,
+    /// Least time to settle after the last insertion, √(d/g).
+    pub settle_min: f64,
+    /// Most time to settle after the last insertion, √(d/g).
+    pub settle_max: f64,
+}
+
+impl Default for HeapSpec {
+    fn default() -> Self {
+        HeapSpec {
+            plate: 40.0,
+            height: 30.0,
+            inlet_width: 4.4,
+            inlet_floor: 20.0,
+            fill_fraction: 0.2,
+            interval: 3.5,
+            max_grains: 25_000,
+            rest_energy: 1e-6,
+            settle_min: 20.0,
+            settle_max: 400.0,
+        }
+    }
+}
+
+impl Section for HeapSpec {
+    const KEY: &'static str = "heap";
+    const ABOUT: &'static str =
+        "the pour: plate, domain, insertion prism and rate, grain cap, settling (lengths in d, times in √(d/g))";
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        c.positive("heap.plate", self.plate);
+        c.positive("heap.height", self.height);
+        c.positive("heap.inlet_width", self.inlet_width);
+        c.non_negative("heap.inlet_floor", self.inlet_floor);
+        c.positive("heap.fill_fraction", self.fill_fraction);
+        c.positive("heap.interval", self.interval);
+        c.positive("heap.rest_energy", self.rest_energy);
+        c.non_negative("heap.settle_min", self.settle_min);
+        c.positive("heap.settle_max", self.settle_max);
+        if self.fill_fraction > 0.5 {
+            c.fail("heap.fill_fraction", "a random fill reaches at most 0.5");
+        }
+        if self.max_grains == 0 || self.max_grains > MAX_GRAINS {
+            c.fail(
+                "heap.max_grains",
+                format!("must lie between 1 and {MAX_GRAINS}"),
+            );
+        }
+        if self.inlet_width > self.plate {
+            c.fail("heap.inlet_width", "must not exceed the plate");
+        }
+        if self.settle_max < self.settle_min {
+            c.fail("heap.settle_max", "must not be below heap.settle_min");
+        }
+        let largest = scene
+            .section::<Grains>()
+            .map(|g| g.diameter_range().1 / g.diameter)
+            .unwrap_or(1.0);
+        if self.inlet_width < largest || self.height < self.inlet_floor + largest {
+            c.fail(
+                "heap.inlet_width",
+                "the insertion prism must hold the largest grain (check heap.inlet_width, heap.inlet_floor and heap.height)",
+            );
+        }
+    }
+}
+
+static METRICS: [Metric; 6] = [
+    Metric {
+        name: "theta_r",
+        label: "θ_r",
+        unit: "°",
+        description: "angle of repose: mean over the two side views of atan(4A/b²), A the area under the heap's outline and b the plate",
+        phase: "settle",
+    },
+    Metric {
+        name: "theta_r_sd",
+        label: "sd θ_r",
+        unit: "°",
+        description: "standard deviation of the angle between the two side views",
+        phase: "settle",
+    },
+    Metric {
+        name: "theta_r_footprint",
+        label: "θ_r (footprint)",
+        unit: "°",
+        description: "the same angle with b the heap's own footprint in each view, for heaps that do not cover the plate",
+        phase: "settle",
+    },
+    Metric {
+        name: "heap_grains",
+        label: "N",
+        unit: "grains",
+        description: "grains in the settled heap",
+        phase: "settle",
+    },
+    Metric {
+        name: "heap_height",
+        label: "H",
+        unit: "d",
+        description: "height of the settled heap's top",
+        phase: "settle",
+    },
+    Metric {
+        name: "surface_roughness",
+        label: "roughness",
+        unit: "d",
+        description: "rms distance of the side views' outlines from their fitted triangles: small for a regular cone (regime II), large for an irregular heap (regime I)",
+        phase: "settle",
+    },
+];
+
+impl Protocol for Heap {
+    fn name(&self) -> &'static str {
+        "heap"
+    }
+
+    fn about(&self) -> &'static str {
+        "pour spheres onto a plate with open edges and measure the settled heap's angle of repose θ_r"
+    }
+
+    fn dimensions(&self) -> &'static [usize] {
+        &[3]
+    }
+
+    fn models(&self) -> &'static [&'static str] {
+        &[elekes_parteli::NAME]
+    }
+
+    fn sections(&self) -> Vec<SectionDecl> {
+        vec![SectionDecl::of::<HeapSpec>()]
+    }
+
+    fn metrics(&self) -> &'static [Metric] {
+        &METRICS
+    }
+
+    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
+        pour::preset(preset)
+    }
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        pour::check_scene(scene, c);
+    }
+
+    fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
+        let spec: HeapSpec = scene.section()?;
+        let scales = Scales::of(scene)?;
+        let grains: Grains = scene.section()?;
+        models::with_engine::<3, _>(
+            scene,
+            Job {
+                scene,
+                spec,
+                scales,
+                grains,
+                observer,
+            },
+        )
+    }
+}
+
+struct Job<'a> {
+    scene: &'a Scene,
+    spec: HeapSpec,
+    scales: Scales,
+    grains: Grains,
+    observer: &'a mut dyn Observer,
+}
+
+impl EngineJob<3> for Job<'_> {
+    type Output = RunReport;
+
+    fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> RunReport {
+        let sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
+        let s = self.scales;
+        let mut run = Runner::new(
+            sim,
+            self.scene,
+            self.observer,
+            0.25 * s.time,
+            self.spec.height * s.d,
+        );
+        let mut pour = Pour {
+            spec: &self.spec,
+            scales: s,
+            grains: &self.grains,
+            stream: Stream::new(self.scene.seed),
+            inserted: 0,
+            crest: Vec::new(),
+        };
+        let mut findings = Findings::default();
+        let outcome = match pour.pour_and_settle(&mut run) {
+            Ok(()) => measure(&run.sim.particles, &self.spec, s.d, &mut findings),
+            Err(outcome) => outcome,
+        };
+        findings.inserted = pour.inserted;
+        findings.series.push(pour.crest_curve());
+        run.report(outcome, findings)
+    }
+}
+
+/// The plate at z = 0 with the grains' material, and outlets at its edges.
+fn plate<L: ContactLaw<3>, I: Integrator<3>>(
+    scene: &Scene,
+    spec: &HeapSpec,
+    d: f64,
+    laws: Laws<L>,
+) -> Simulation<3, L, I> {
+    let floor = Wall::<3>::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
+    let gravity = Vector::<3>::from_column_slice(&scene.gravity);
+    let particles = Particles::<3>::new(L::ROTATES);
+    let mut sim = super::runner::engine(
+        scene,
+        particles,
+        vec![(floor, laws.wall)],
+        gravity,
+        laws.pair,
+    );
+    let half = 0.5 * spec.plate * d;
+    for axis in 0..2 {
+        for sign in [-1.0, 1.0] {
+            let mut normal = Vector::<3>::zeros();
+            normal[axis] = sign;
+            sim.outlets.push(Outlet {
+                point: normal * half,
+                normal,
+            });
+        }
+    }
+    sim
+}
+
+/// The state of the pour.
+struct Pour<'a> {
+    spec: &'a HeapSpec,
+    scales: Scales,
+    grains: &'a Grains,
+    stream: Stream,
+    inserted: usize,
+    /// `[time, crest]` before each insertion, in √(d/g) and d.
+    crest: Vec<[f64; 2]>,
+}
+
+impl Pour<'_> {
+    fn pour_and_settle<L: ContactLaw<3>, I: Integrator<3>>(
+        &mut self,
+        run: &mut Runner<'_, 3, L, I>,
+    ) -> Result<(), Outcome> {
+        let s = self.scales;
+        let steps = ((self.spec.interval * s.time / run.sim.dt).round() as u64).max(1);
+        let mut last_insertion = 0.0;
+        while self.inserted < self.spec.max_grains {
+            let crest = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
+            self.crest.push([run.sim.time / s.time, crest / s.d]);
+            let top = self.spec.height * s.d;
+            if crest > top - s.d {
+                return Err(Outcome::Unmeasurable {
+                    reason: format!(
+                        "the heap's crest reached the top of the domain ({:.1} d) after {} grains: no heap forms at this cohesion (regime I of Elekes & Parteli)",
+                        self.spec.height, self.inserted
+                    ),
+                });
+            }
+            let added = self.insert(&mut run.sim, crest.max(self.spec.inlet_floor * s.d));
+            if added > 0 {
+                last_insertion = run.sim.time;
+            }
+            run.advance(POUR, steps)
+                .map_err(|stop| stop.outcome(POUR, String::new))?;
+        }
+        let rest = s.rest_energy(self.spec.rest_energy);
+        let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
+        pour::settle(run, SETTLE, last_insertion, window, rest).map_err(|stop: Stop| {
+            stop.outcome(SETTLE, || {
+                format!(
+                    "the heap still moved {:.0} √(d/g) after the last insertion (kinetic energy per grain above {:.0e} m g d)",
+                    self.spec.settle_max, self.spec.rest_energy
+                )
+            })
+        })
+    }
+
+    /// Fills the insertion prism above `floor` to its solid fraction.
+    fn insert<L: ContactLaw<3>, I: Integrator<3>>(
+        &mut self,
+        sim: &mut Simulation<3, L, I>,
+        floor: f64,
+    ) -> usize {
+        let d = self.scales.d;
+        let half = 0.5 * self.spec.inlet_width * d;
+        let region = Region {
+            lo: Vector::<3>::new(-half, -half, floor),
+            hi: Vector::<3>::new(half, half, self.spec.height * d),
+        };
+        let largest = self.grains.diameter_range().1;
+        let mut placer = Placer::new(largest, Vector::<3>::zeros(), [0.0; 3]);
+        let mut inside = 0.0;
+        let p = &sim.particles;
+        for i in 0..p.len() {
+            let x = p.pos[i];
+            let near =
+                (0..3).all(|a| x[a] > region.lo[a] - largest && x[a] < region.hi[a] + largest);
+            if near {
+                placer.add(x, p.radius[i]);
+            }
+            if region.contains(&x) {
+                inside += 4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3);
+            }
+        }
+        let budget = self.spec.max_grains - self.inserted;
+        let fraction = self.spec.fill_fraction;
+        let new = pour::fill(
+            &region,
+            fraction,
+            &mut placer,
+            inside,
+            self.grains,
+            &mut self.stream,
+            budget,
+        );
+        for (x, dia) in &new {
+            sim.insert(*x, Vector::<3>::zeros(), 0.5 * dia, self.grains.mass(*dia));
+        }
+        self.inserted += new.len();
+        new.len()
+    }
+
+    fn crest_curve(&self) -> Curve {
+        Curve {
+            name: "crest".into(),
+            title: "height of the heap's crest before each insertion".into(),
+            x_label: "time (√(d/g))".into(),
+            y_label: "crest (d)".into(),
+            points: self.crest.clone(),
+            band: None,
+        }
+    }
+}
+
+/// The highest grain top among grains slower than `slow` (grains still
+/// falling from the prism do not count), m.
+fn crest(p: &Particles<3>, slow: f64) -> f64 {
+    let mut top = 0.0f64;
+    for i in 0..p.len() {
+        if p.vel[i].norm_squared() < slow * slow {
+            top = top.max(p.pos[i].z + p.radius[i]);
+        }
+    }
+    top
+}
+
+/// One side view of a heap.
+#[derive(Debug, Clone, Serialize)]
+pub struct SideView {
+    /// Area under the outline, d².
+    pub area: f64,
+    /// Angle with the plate as base, °.
+    pub theta_plate: f64,
+    /// The outline's extent along the view, d.
+    pub footprint: f64,
+    /// Angle with the footprint as base, °.
+    pub theta_footprint: f64,
+    /// Rms distance of the outline from its fitted triangle, d.
+    pub roughness: f64,
+}
+
+impl SideView {
+    /// Reads a profile (lengths in m) with plate side `plate` (d).
+    pub fn of(profile: &Profile, d: f64, plate: f64) -> Option<SideView> {
+        let w = profile.cell_width / d;
+        let h: Vec<f64> = profile.h.iter().map(|v| v / d).collect();
+        let x: Vec<f64> = profile.x.iter().map(|v| v / d).collect();
+        let first = h.iter().position(|v| *v > 0.0)?;
+        let last = h.iter().rposition(|v| *v > 0.0)?;
+        let area: f64 = h.iter().sum::<f64>() * w;
+        let footprint = (last - first + 1) as f64 * w;
+        let angle = |b: f64| (4.0 * area / (b * b)).atan().to_degrees();
+        let theta_footprint = angle(footprint);
+        let centre = h.iter().zip(&x).map(|(h, x)| h * x).sum::<f64>() / h.iter().sum::<f64>();
+        let slope = theta_footprint.to_radians().tan();
+        let rms = (first..=last)
+            .map(|k| {
+                let tri = (slope * (0.5 * footprint - (x[k] - centre).abs())).max(0.0);
+                (h[k] - tri).powi(2)
+            })
+            .sum::<f64>()
+            / (last - first + 1) as f64;
+        Some(SideView {
+            area,
+            theta_plate: angle(plate),
+            footprint,
+            theta_footprint,
+            roughness: rms.sqrt(),
+        })
+    }
+}
+
+/// The metrics of the settled heap, or why it cannot be measured.
+fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -> Outcome {
+    let half = 0.5 * spec.plate * d;
+    let profiles: Vec<Profile> = (0..2)
+        .map(|axis| Profile::measure(&p.pos, &p.radius, axis, -half, half))
+        .collect();
+    let views: Vec<SideView> = profiles
+        .iter()
+        .filter_map(|pr| SideView::of(pr, d, spec.plate))
+        .collect();
+    let occupied = profiles[0].h.iter().filter(|h| **h > 0.0).count();
+    if views.len() < 2 || occupied < 3 {
+        return Outcome::Unmeasurable {
+            reason: format!(
+                "{} grains stayed on the plate, covering {occupied} columns: too few to measure a heap",
+                p.len()
+            ),
+        };
+    }
+    let mean_sd = |f: &dyn Fn(&SideView) -> f64| {
+        let (a, b) = (f(&views[0]), f(&views[1]));
+        (0.5 * (a + b), (a - b).abs() / std::f64::consts::SQRT_2)
+    };
+    let (theta, sd) = mean_sd(&|v| v.theta_plate);
+    findings.metric("theta_r", theta);
+    findings.metric("theta_r_sd", sd);
+    findings.metric("theta_r_footprint", mean_sd(&|v| v.theta_footprint).0);
+    findings.metric("heap_grains", p.len() as f64);
+    let top = (0..p.len())
+        .map(|i| p.pos[i].z + p.radius[i])
+        .fold(0.0, f64::max);
+    findings.metric("heap_height", top / d);
+    findings.metric("surface_roughness", mean_sd(&|v| v.roughness).0);
+    findings.details = json!({ "side_views": { "xz": views[0], "yz": views[1] } });
+    findings.profiles = profiles;
+    Outcome::Completed
+}

@@ -1,0 +1,309 @@
+//! The packing column of Elekes & Parteli's fig. 5: grains released from
+//! rest at a low solid fraction in a tall column, periodic sideways, settle
+//! on a plate; the packing fraction is read in the middle of the bed.
+
+use super::pour::{self, Placer, Region, Scales};
+use super::runner::{Findings, Runner};
+use super::{Metric, Observer, Protocol};
+use crate::contact::ContactLaw;
+use crate::dim::Vector;
+use crate::engine::Simulation;
+use crate::integrate::Integrator;
+use crate::models::elekes_parteli::{self, Grains, Material};
+use crate::models::{self, EngineJob, Laws};
+use crate::particles::Particles;
+use crate::preset::Preset;
+use crate::report::{Outcome, Phase, RunReport};
+use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
+use crate::setup::Stream;
+use crate::walls::Wall;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+pub struct Packing;
+
+pub const SETTLE: Phase = Phase("settle");
+
+/// The column, lengths in grain diameters `d` and times in `√(d/g)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PackingSpec {
+    /// Side of the square cross-section (periodic), d.
+    pub width: f64,
+    /// Height of the column the grains start in, d.
+    pub height: f64,
+    /// Solid fraction of the grains released.
+    pub fill_fraction: f64,
+    /// The bed is at rest when the translational kinetic energy per grain
+    /// is below this, in m g d.
+    pub rest_energy: f64,
+    /// Least time to settle, √(d/g).
+    pub settle_min: f64,
+    /// Most time to settle, √(d/g).
+    pub settle_max: f64,
+    /// The part of the bed measured, as fractions of the highest centre.
+    pub slab: [f64; 2],
+}
+
+impl Default for PackingSpec {
+    fn default() -> Self {
+        PackingSpec {
+            width: 17.0,
+            height: 100.0,
+            fill_fraction: 0.2,
+            rest_energy: 1e-6,
+            settle_min: 20.0,
+            settle_max: 400.0,
+            slab: [0.3, 0.7],
+        }
+    }
+}
+
+impl PackingSpec {
+    /// The number of grains of diameter `d` the column holds at the fill fraction.
+    pub fn grain_count(&self) -> usize {
+        let volume = self.width * self.width * self.height;
+        (self.fill_fraction * volume / (std::f64::consts::PI / 6.0)).round() as usize
+    }
+}
+
+impl Section for PackingSpec {
+    const KEY: &'static str = "packing";
+    const ABOUT: &'static str =
+        "the column: periodic cross-section, height, release fraction, settling, measured slab (lengths in d, times in √(d/g))";
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        c.positive("packing.width", self.width);
+        c.positive("packing.height", self.height);
+        c.positive("packing.fill_fraction", self.fill_fraction);
+        c.positive("packing.rest_energy", self.rest_energy);
+        c.non_negative("packing.settle_min", self.settle_min);
+        c.positive("packing.settle_max", self.settle_max);
+        if self.fill_fraction > 0.5 {
+            c.fail("packing.fill_fraction", "a random fill reaches at most 0.5");
+        }
+        let [lo, hi] = self.slab;
+        if !(0.0 <= lo && lo < hi && hi <= 1.0) {
+            c.fail("packing.slab", "needs 0 ≤ lower < upper ≤ 1");
+        }
+        if self.grain_count() > MAX_GRAINS {
+            c.fail(
+                "packing.height",
+                format!("the column would hold more than {MAX_GRAINS} grains"),
+            );
+        }
+        let (Ok(grains), Ok(m)) = (scene.section::<Grains>(), scene.section::<Material>()) else {
+            return;
+        };
+        // A grain must meet at most one image of another across the faces.
+        let range = if m.coheres() { m.d_max } else { 0.0 };
+        let reach = 2.0 * grains.diameter_range().1 + scene.numerics.skin + range;
+        if self.width * grains.diameter <= 2.0 * reach {
+            c.fail(
+                "packing.width",
+                format!(
+                    "{} d is too narrow for a periodic column: it must exceed {:.2} d",
+                    self.width,
+                    2.0 * reach / grains.diameter
+                ),
+            );
+        }
+    }
+}
+
+static METRICS: [Metric; 3] = [
+    Metric {
+        name: "packing_fraction",
+        label: "φ",
+        unit: "",
+        description:
+            "solid fraction of the grains centred between 0.3 and 0.7 of the highest centre",
+        phase: "settle",
+    },
+    Metric {
+        name: "packing_fraction_sd",
+        label: "sd φ",
+        unit: "",
+        description: "standard deviation of the solid fraction over the four quarter columns",
+        phase: "settle",
+    },
+    Metric {
+        name: "bed_height",
+        label: "bed",
+        unit: "d",
+        description: "height of the highest grain centre of the settled bed",
+        phase: "settle",
+    },
+];
+
+impl Protocol for Packing {
+    fn name(&self) -> &'static str {
+        "packing"
+    }
+
+    fn about(&self) -> &'static str {
+        "release spheres from rest in a periodic column and measure the packing fraction φ of the settled bed"
+    }
+
+    fn dimensions(&self) -> &'static [usize] {
+        &[3]
+    }
+
+    fn models(&self) -> &'static [&'static str] {
+        &[elekes_parteli::NAME]
+    }
+
+    fn sections(&self) -> Vec<SectionDecl> {
+        vec![SectionDecl::of::<PackingSpec>()]
+    }
+
+    fn metrics(&self) -> &'static [Metric] {
+        &METRICS
+    }
+
+    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
+        pour::preset(preset)
+    }
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        pour::check_scene(scene, c);
+    }
+
+    fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
+        let spec: PackingSpec = scene.section()?;
+        let scales = Scales::of(scene)?;
+        let grains: Grains = scene.section()?;
+        models::with_engine::<3, _>(
+            scene,
+            Job {
+                scene,
+                spec,
+                scales,
+                grains,
+                observer,
+            },
+        )?
+    }
+}
+
+struct Job<'a> {
+    scene: &'a Scene,
+    spec: PackingSpec,
+    scales: Scales,
+    grains: Grains,
+    observer: &'a mut dyn Observer,
+}
+
+impl EngineJob<3> for Job<'_> {
+    type Output = Result<RunReport, SceneError>;
+
+    fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> Self::Output {
+        let s = self.scales;
+        let sim = column::<L, I>(self.scene, &self.spec, &self.grains, s.d, laws)?;
+        let mut run = Runner::new(
+            sim,
+            self.scene,
+            self.observer,
+            0.25 * s.time,
+            self.spec.height * s.d,
+        );
+        let rest = s.rest_energy(self.spec.rest_energy);
+        let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
+        let mut findings = Findings::default();
+        let outcome = match pour::settle(&mut run, SETTLE, 0.0, window, rest) {
+            Ok(()) => measure(&run.sim, &self.spec, s.d, &mut findings),
+            Err(stop) => stop.outcome(SETTLE, || {
+                format!(
+                    "the bed still moved after {:.0} √(d/g) (kinetic energy per grain above {:.0e} m g d)",
+                    self.spec.settle_max, self.spec.rest_energy
+                )
+            }),
+        };
+        Ok(run.report(outcome, findings))
+    }
+}
+
+/// The plate, the periodic cross-section and the grains released at rest.
+fn column<L: ContactLaw<3>, I: Integrator<3>>(
+    scene: &Scene,
+    spec: &PackingSpec,
+    grains: &Grains,
+    d: f64,
+    laws: Laws<L>,
+) -> Result<Simulation<3, L, I>, SceneError> {
+    let w = spec.width * d;
+    let region = Region {
+        lo: Vector::<3>::zeros(),
+        hi: Vector::<3>::new(w, w, spec.height * d),
+    };
+    let mut placer = Placer::new(grains.diameter_range().1, Vector::<3>::zeros(), [w, w, 0.0]);
+    let mut stream = Stream::new(scene.seed);
+    let placed = pour::fill(
+        &region,
+        spec.fill_fraction,
+        &mut placer,
+        0.0,
+        grains,
+        &mut stream,
+        spec.grain_count().max(1) * 2,
+    );
+    let mut particles = Particles::<3>::new(L::ROTATES);
+    for (x, dia) in placed {
+        particles.push(x, Vector::<3>::zeros(), 0.5 * dia, grains.mass(dia));
+    }
+    let floor = Wall::<3>::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
+    let gravity = Vector::<3>::from_column_slice(&scene.gravity);
+    let mut sim = super::runner::engine(
+        scene,
+        particles,
+        vec![(floor, laws.wall)],
+        gravity,
+        laws.pair,
+    );
+    sim.set_periodic(Vector::<3>::zeros(), [w, w, 0.0])
+        .map_err(|e| SceneError::single("packing.width", e))?;
+    Ok(sim)
+}
+
+/// Solid fraction of the slab, over the whole cross-section and each quarter.
+fn measure<L: ContactLaw<3>, I: Integrator<3>>(
+    sim: &Simulation<3, L, I>,
+    spec: &PackingSpec,
+    d: f64,
+    findings: &mut Findings,
+) -> Outcome {
+    let p = &sim.particles;
+    let top = p.pos.iter().map(|x| x.z).fold(0.0, f64::max);
+    let (lo, hi) = (spec.slab[0] * top, spec.slab[1] * top);
+    if p.len() < 8 || hi - lo < d {
+        return Outcome::Unmeasurable {
+            reason: format!(
+                "the bed is {:.1} d high: too low to measure a packing fraction between {} and {} of it",
+                top / d,
+                spec.slab[0],
+                spec.slab[1]
+            ),
+        };
+    }
+    let w = spec.width * d;
+    let mut quarters = [0.0f64; 4];
+    for i in 0..p.len() {
+        let mut x = p.pos[i];
+        if let Some(per) = &sim.periodic {
+            per.wrap(&mut x);
+        }
+        if x.z >= lo && x.z < hi {
+            let q = usize::from(x.x >= 0.5 * w) + 2 * usize::from(x.y >= 0.5 * w);
+            quarters[q] += 4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3);
+        }
+    }
+    let cell = 0.25 * w * w * (hi - lo);
+    let phi: Vec<f64> = quarters.iter().map(|v| v / cell).collect();
+    let mean = phi.iter().sum::<f64>() / 4.0;
+    let sd = (phi.iter().map(|f| (f - mean).powi(2)).sum::<f64>() / 3.0).sqrt();
+    findings.metric("packing_fraction", mean);
+    findings.metric("packing_fraction_sd", sd);
+    findings.metric("bed_height", top / d);
+    findings.details = json!({ "quarters": phi, "slab": [lo / d, hi / d] });
+    Outcome::Completed
+}

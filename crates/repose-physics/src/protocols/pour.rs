@@ -1,0 +1,295 @@
+//! What the 3D protocols of Elekes & Parteli share: grains of the scene's
+//! sizes placed at random without overlap in a region (across periodic
+//! faces where there are some), the grain scales `d` and `√(d/g)`, and the
+//! settling criterion.
+
+use super::runner::{Runner, Stop};
+use crate::contact::ContactLaw;
+use crate::dim::Vector;
+use crate::integrate::Integrator;
+use crate::models::elekes_parteli::Grains;
+use crate::preset::Preset;
+use crate::report::Phase;
+use crate::scene::{Checks, Scene, SceneError};
+use crate::setup::Stream;
+use serde_json::Value;
+use std::collections::HashMap;
+
+/// The length and time scales of a scene: the reference diameter `d`, the
+/// gravity `g` and `√(d/g)`.
+#[derive(Debug, Clone, Copy)]
+pub struct Scales {
+    pub d: f64,
+    pub g: f64,
+    pub time: f64,
+    /// Mass of a grain of diameter `d`.
+    pub mass: f64,
+}
+
+impl Scales {
+    pub fn of(scene: &Scene) -> Result<Scales, SceneError> {
+        let grains: Grains = scene.section()?;
+        let d = grains.diameter;
+        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        Ok(Scales {
+            d,
+            g,
+            time: (d / g).sqrt(),
+            mass: grains.mass(d),
+        })
+    }
+
+    /// The translational kinetic energy per grain below which a pile is at rest.
+    pub fn rest_energy(&self, per_mgd: f64) -> f64 {
+        per_mgd * self.mass * self.g * self.d
+    }
+}
+
+/// Gravity must point straight down the z axis.
+pub fn check_gravity_down(scene: &Scene, c: &mut Checks) {
+    if let [gx, gy, gz] = scene.gravity[..] {
+        if gx != 0.0 || gy != 0.0 || gz >= 0.0 {
+            c.fail(
+                "gravity",
+                "must point down the z axis, [0, 0, -g] with g > 0",
+            );
+        }
+    }
+}
+
+/// Random placement of spheres without overlap, with a hash grid of cells
+/// at least one largest diameter wide. Along periodic axes cells wrap, and
+/// distances are taken to the nearest image.
+pub struct Placer {
+    cell: [f64; 3],
+    /// Cells along each periodic axis; 0 for an open axis.
+    wrap: [i64; 3],
+    origin: Vector<3>,
+    periods: [f64; 3],
+    cells: HashMap<[i64; 3], Vec<(Vector<3>, f64)>>,
+}
+
+impl Placer {
+    /// A placer for grains up to `largest` in diameter; `periods` gives the
+    /// period of each axis from `origin` (0 for an open axis).
+    pub fn new(largest: f64, origin: Vector<3>, periods: [f64; 3]) -> Placer {
+        let mut cell = [largest; 3];
+        let mut wrap = [0i64; 3];
+        for a in 0..3 {
+            if periods[a] > 0.0 {
+                let n = ((periods[a] / largest).floor() as i64).max(1);
+                wrap[a] = n;
+                cell[a] = periods[a] / n as f64;
+            }
+        }
+        Placer {
+            cell,
+            wrap,
+            origin,
+            periods,
+            cells: HashMap::new(),
+        }
+    }
+
+    fn key(&self, x: &Vector<3>) -> [i64; 3] {
+        let mut k = [0i64; 3];
+        for a in 0..3 {
+            let c = ((x[a] - self.origin[a]) / self.cell[a]).floor() as i64;
+            k[a] = if self.wrap[a] > 0 {
+                c.rem_euclid(self.wrap[a])
+            } else {
+                c
+            };
+        }
+        k
+    }
+
+    /// Records a grain already there.
+    pub fn add(&mut self, x: Vector<3>, radius: f64) {
+        let k = self.key(&x);
+        self.cells.entry(k).or_default().push((x, radius));
+    }
+
+    /// Whether a sphere at `x` of `radius` overlaps nothing recorded.
+    pub fn fits(&self, x: &Vector<3>, radius: f64) -> bool {
+        let k = self.key(x);
+        for code in 0..27 {
+            let mut c = k;
+            let mut rest = code;
+            for a in 0..3 {
+                c[a] += (rest % 3) as i64 - 1;
+                rest /= 3;
+                if self.wrap[a] > 0 {
+                    c[a] = c[a].rem_euclid(self.wrap[a]);
+                }
+            }
+            let Some(list) = self.cells.get(&c) else {
+                continue;
+            };
+            for (y, ry) in list {
+                let mut r = x - y;
+                for a in 0..3 {
+                    if self.periods[a] > 0.0 {
+                        r[a] -= self.periods[a] * (r[a] / self.periods[a]).round();
+                    }
+                }
+                let reach = radius + ry;
+                if r.norm_squared() < reach * reach {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// A box region for grain centres.
+#[derive(Debug, Clone, Copy)]
+pub struct Region {
+    pub lo: Vector<3>,
+    pub hi: Vector<3>,
+}
+
+impl Region {
+    pub fn volume(&self) -> f64 {
+        (self.hi - self.lo).iter().map(|x| x.max(0.0)).product()
+    }
+
+    pub fn contains(&self, x: &Vector<3>) -> bool {
+        (0..3).all(|a| x[a] >= self.lo[a] && x[a] < self.hi[a])
+    }
+
+    /// A uniform point of the region shrunk by `margin[a]` on both sides of axis `a`.
+    fn draw(&self, stream: &mut Stream, margin: [f64; 3]) -> Vector<3> {
+        Vector::<3>::from_fn(|a, _| {
+            let m = margin[a].min(0.5 * (self.hi[a] - self.lo[a]));
+            let (lo, hi) = (self.lo[a] + m, self.hi[a] - m);
+            lo + (hi - lo) * stream.uniform()
+        })
+    }
+}
+
+/// Draws diameters from the scene's grains: one size, or the mixture's
+/// sizes by their number fractions.
+pub fn draw_diameter(grains: &Grains, stream: &mut Stream) -> f64 {
+    if grains.mix.is_empty() {
+        return grains.diameter;
+    }
+    let mut u = stream.uniform();
+    for s in &grains.mix {
+        if u < s.fraction {
+            return s.diameter;
+        }
+        u -= s.fraction;
+    }
+    grains.mix[grains.mix.len() - 1].diameter
+}
+
+/// Adds grains at random points of `region` (wholly inside it along the
+/// open axes) until their volume, with that of the grains already centred
+/// there, reaches `fraction` of the region, or `budget` grains were added.
+/// Returns the new grains' centres and diameters. A grain that finds no
+/// room after many tries ends the fill.
+pub fn fill(
+    region: &Region,
+    fraction: f64,
+    placer: &mut Placer,
+    existing_volume: f64,
+    grains: &Grains,
+    stream: &mut Stream,
+    budget: usize,
+) -> Vec<(Vector<3>, f64)> {
+    let sphere = |d: f64| std::f64::consts::PI / 6.0 * d * d * d;
+    let target = fraction * region.volume();
+    let mut volume = existing_volume;
+    let mut out = Vec::new();
+    'grains: while volume < target && out.len() < budget {
+        let d = draw_diameter(grains, stream);
+        // Along a periodic axis a grain may straddle the face.
+        let margin: [f64; 3] = std::array::from_fn(|a| {
+            if placer.periods[a] > 0.0 {
+                0.0
+            } else {
+                0.5 * d
+            }
+        });
+        for _ in 0..1000 {
+            let x = region.draw(stream, margin);
+            if placer.fits(&x, 0.5 * d) {
+                placer.add(x, 0.5 * d);
+                out.push((x, d));
+                volume += sphere(d);
+                continue 'grains;
+            }
+        }
+        break;
+    }
+    out
+}
+
+/// Runs until the translational kinetic energy per grain is below `rest`
+/// and at least `min_time` has passed since `since`; fails with
+/// [`Stop::TimedOut`] once `max_time` has passed since then.
+pub fn settle<L: ContactLaw<3>, I: Integrator<3>>(
+    run: &mut Runner<'_, 3, L, I>,
+    phase: Phase,
+    since: f64,
+    (min_time, max_time): (f64, f64),
+    rest: f64,
+) -> Result<(), Stop> {
+    loop {
+        let point = run.sample(phase)?;
+        let waited = run.sim.time - since;
+        if waited >= min_time && point.kinetic_energy < rest {
+            return Ok(());
+        }
+        if waited >= max_time {
+            return Err(Stop::TimedOut);
+        }
+        let steps = run.check_steps;
+        run.sim.run(steps)?;
+    }
+}
+
+/// The checks every 3D pouring protocol shares.
+pub fn check_scene(scene: &Scene, c: &mut Checks) {
+    check_gravity_down(scene, c);
+    if scene.duration.is_some() {
+        c.fail("duration", "only a free_run takes a fixed duration");
+    }
+    if !scene.walls.is_empty() {
+        c.fail(
+            "walls",
+            "this protocol builds its own plate; walls are for a free_run",
+        );
+    }
+    if !scene.particles.is_empty() {
+        c.fail(
+            "particles",
+            "this protocol pours its own grains; particles are for a free_run",
+        );
+    }
+}
+
+/// The settings the fidelity presets give the 3D protocols: a softened
+/// modulus by its stiffness number `κ = Y/(ρ g d)` (where the scene gives
+/// no modulus) and the time step; `paper` is glass's 63 GPa. The biases
+/// they cost are measured in `docs/tradeoff-heap.md`.
+pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
+    match preset {
+        Preset::Quick => vec![
+            ("numerics.integrator", Value::from("verlet")),
+            ("numerics.dt_factor", Value::from(0.1)),
+            ("material.kappa", Value::from(1e5)),
+        ],
+        Preset::Standard => vec![
+            ("numerics.integrator", Value::from("verlet")),
+            ("numerics.dt_factor", Value::from(0.1)),
+            ("material.kappa", Value::from(1e6)),
+        ],
+        Preset::Paper => vec![
+            ("numerics.integrator", Value::from("verlet")),
+            ("numerics.dt_factor", Value::from(0.1)),
+        ],
+    }
+}
