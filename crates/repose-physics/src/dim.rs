@@ -52,6 +52,10 @@ pub trait Space<const D: usize>: 'static {
     /// Squared length of a shear quantity.
     fn magnitude_squared(s: Self::Shear) -> f64;
 
+    /// The shear quantity of a pair seen from its other grain (whose
+    /// normal is the opposite).
+    fn shear_flip(s: Self::Shear) -> Self::Shear;
+
     /// An angular velocity or torque: a scalar about the out-of-plane axis
     /// in 2D, a vector in 3D.
     type Angular: Copy
@@ -119,6 +123,12 @@ impl Space<2> for Dim<2> {
     #[inline(always)]
     fn magnitude_squared(s: f64) -> f64 {
         s * s
+    }
+
+    /// A scalar along the clockwise tangent of `n`: seen from the other
+    /// grain both the displacement and the tangent turn round, the scalar stays.
+    fn shear_flip(s: f64) -> f64 {
+        s
     }
 
     #[inline(always)]
@@ -202,6 +212,10 @@ impl Space<3> for Dim<3> {
     #[inline(always)]
     fn magnitude_squared(s: Vector<3>) -> f64 {
         s.norm_squared()
+    }
+
+    fn shear_flip(s: Vector<3>) -> Vector<3> {
+        -s
     }
 
     #[inline(always)]

@@ -34,6 +34,9 @@ where
     /// Grains were removed; `keep` says which survived (order preserved).
     fn on_retain(&mut self, keep: &[bool]);
 
+    /// Grains were reordered (see [`Particles::permute`]).
+    fn on_permute(&mut self, order: &[usize]);
+
     /// Velocities or positions were changed from outside: restart the history.
     fn restart(&mut self, particles: &Particles<D>, dt: f64);
 }
@@ -118,6 +121,8 @@ where
     fn on_insert(&mut self, _particles: &Particles<D>, _dt: f64) {}
 
     fn on_retain(&mut self, _keep: &[bool]) {}
+
+    fn on_permute(&mut self, _order: &[usize]) {}
 
     fn restart(&mut self, _particles: &Particles<D>, _dt: f64) {}
 }
@@ -297,6 +302,18 @@ where
         compact(&mut self.derivs, keep, 4 * D);
         if !self.spin.is_empty() {
             compact(&mut self.spin, keep, 1);
+        }
+    }
+
+    fn on_permute(&mut self, order: &[usize]) {
+        let width = 4 * D;
+        let old = std::mem::take(&mut self.derivs);
+        self.derivs = order
+            .iter()
+            .flat_map(|&i| old[i * width..(i + 1) * width].iter().copied())
+            .collect();
+        if !self.spin.is_empty() {
+            self.spin = order.iter().map(|&i| self.spin[i]).collect();
         }
     }
 

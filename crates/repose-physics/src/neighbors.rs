@@ -32,11 +32,6 @@ pub struct NeighborList<const D: usize, H> {
     pub history: Vec<H>,
     /// Image shift of each pair across periodic faces (empty without them).
     pub shifts: Vec<Vector<D>>,
-    /// The pairs of each grain, in list order (built on request, for
-    /// summing forces grain by grain in parallel): `incidence[start[i]..start[i + 1]]`
-    /// holds `2k` where grain `i` is the first of pair `k`, `2k + 1` where it is the second.
-    pub incidence: Vec<u32>,
-    pub incidence_start: Vec<u32>,
     /// How many times the list was built.
     pub builds: u64,
     anchor: Vec<Vector<D>>,
@@ -54,8 +49,6 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
             pairs: Vec::new(),
             history: Vec::new(),
             shifts: Vec::new(),
-            incidence: Vec::new(),
-            incidence_start: Vec::new(),
             builds: 0,
             anchor: Vec::new(),
             grid: CellGrid::default(),
@@ -103,8 +96,6 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         self.pairs.truncate(out);
         self.history.truncate(out);
         self.shifts.truncate(out.min(self.shifts.len()));
-        self.incidence.clear();
-        self.incidence_start.clear();
         self.anchor.clear();
     }
 
@@ -142,8 +133,6 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         self.hand_over_springs();
         self.anchor.clear();
         self.anchor.extend_from_slice(&p.pos);
-        self.incidence.clear();
-        self.incidence_start.clear();
         self.builds += 1;
     }
 
@@ -214,31 +203,38 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         }
     }
 
-    /// Builds [`NeighborList::incidence`] for `n` grains, if not built since
-    /// the list last changed.
-    pub fn build_incidence(&mut self, n: usize) {
-        if self.incidence_start.len() == n + 1 {
-            return;
+    /// Renumbers after the grains were reordered (`new_index[old]` is the
+    /// new index of every grain). A pair whose grains swap order is stored
+    /// the other way round, its history seen from the other grain (`flip`)
+    /// and its image shift reversed; the list is sorted again.
+    pub fn permute(&mut self, new_index: &[u32], flip: fn(&mut H)) {
+        let periodic = !self.shifts.is_empty();
+        let mut all: Vec<([u32; 2], H, Vector<D>)> = Vec::with_capacity(self.pairs.len());
+        for k in 0..self.pairs.len() {
+            let [i, j] = self.pairs[k];
+            let (ni, nj) = (new_index[i as usize], new_index[j as usize]);
+            let mut h = self.history[k];
+            let mut shift = if periodic {
+                self.shifts[k]
+            } else {
+                Vector::<D>::zeros()
+            };
+            let pair = if ni < nj {
+                [ni, nj]
+            } else {
+                flip(&mut h);
+                shift = -shift;
+                [nj, ni]
+            };
+            all.push((pair, h, shift));
         }
-        self.incidence_start.clear();
-        self.incidence_start.resize(n + 1, 0);
-        for [i, j] in &self.pairs {
-            self.incidence_start[*i as usize + 1] += 1;
-            self.incidence_start[*j as usize + 1] += 1;
+        all.sort_unstable_by_key(|e| e.0);
+        self.pairs = all.iter().map(|e| e.0).collect();
+        self.history = all.iter().map(|e| e.1).collect();
+        if periodic {
+            self.shifts = all.iter().map(|e| e.2).collect();
         }
-        for c in 0..n {
-            self.incidence_start[c + 1] += self.incidence_start[c];
-        }
-        let mut fill = self.incidence_start.clone();
-        self.incidence.clear();
-        self.incidence.resize(2 * self.pairs.len(), 0);
-        for (k, [i, j]) in self.pairs.iter().enumerate() {
-            for (g, side) in [(*i, 0), (*j, 1)] {
-                let slot = &mut fill[g as usize];
-                self.incidence[*slot as usize] = 2 * k as u32 + side;
-                *slot += 1;
-            }
-        }
+        self.anchor.clear();
     }
 }
 

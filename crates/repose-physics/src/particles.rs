@@ -226,6 +226,27 @@ where
         }
     }
 
+    /// Reorders the grains: the grain at new index `k` is the one that was
+    /// at `order[k]`.
+    pub fn permute(&mut self, order: &[usize]) {
+        fn apply<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
+            if !v.is_empty() {
+                *v = order.iter().map(|&i| v[i]).collect();
+            }
+        }
+        apply(&mut self.id, order);
+        apply(&mut self.pos, order);
+        apply(&mut self.vel, order);
+        apply(&mut self.force, order);
+        apply(&mut self.radius, order);
+        apply(&mut self.mass, order);
+        apply(&mut self.inv_mass, order);
+        apply(&mut self.omega, order);
+        apply(&mut self.torque, order);
+        apply(&mut self.inv_inertia, order);
+        apply(&mut self.load, order);
+    }
+
     /// Translational kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
         self.vel

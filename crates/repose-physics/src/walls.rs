@@ -132,6 +132,17 @@ impl<H: Copy + Default + PartialEq> WallContacts<H> {
         }
     }
 
+    /// Renumbers after the grains were reordered (`new_index[old]` is the
+    /// new index of every grain), keeping each wall's candidates ascending.
+    pub fn permute(&mut self, new_index: &[u32]) {
+        self.renumber(new_index);
+        for (cands, hist) in self.candidates.iter_mut().zip(&mut self.history) {
+            let mut both: Vec<(u32, H)> = cands.iter().copied().zip(hist.iter().copied()).collect();
+            both.sort_unstable_by_key(|e| e.0);
+            (*cands, *hist) = both.into_iter().unzip();
+        }
+    }
+
     /// Re-selects the candidates of every wall, keeping live histories.
     pub fn rebuild<const D: usize>(&mut self, walls: &[Wall<D>], p: &Particles<D>, skin: f64)
     where

@@ -310,7 +310,9 @@ fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
         kinetic: 2.0,
         limit: 1.0,
         time: 0.5,
+        units: repose_physics::engine::Units::CGS,
     }
     .to_string();
     assert!(message.contains("energy blow-up"), "{message}");
+    assert!(message.contains("2.000e0 erg"), "{message}");
 }

@@ -21,6 +21,8 @@ where
     fn elastic_energy(&self, _history: &(), _touch: &Touch<D>) -> f64 {
         0.0
     }
+
+    fn flip(_: &mut ()) {}
 }
 
 /// Cundall–Strack static friction, eq. (2b) of Lee & Herrmann:
@@ -85,6 +87,10 @@ where
     fn elastic_energy(&self, history: &Self::History, _touch: &Touch<D>) -> f64 {
         let s = <Dim<D> as Space<D>>::magnitude(history.displacement);
         0.5 * self.k_s * s * s
+    }
+
+    fn flip(history: &mut Self::History) {
+        history.displacement = <Dim<D> as Space<D>>::shear_flip(history.displacement);
     }
 }
 

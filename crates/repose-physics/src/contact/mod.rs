@@ -134,6 +134,9 @@ where
 
     /// Energy stored in the contact's spring.
     fn elastic_energy(&self, history: &Self::History, touch: &Touch<D>) -> f64;
+
+    /// The history seen from the other grain of the pair.
+    fn flip(history: &mut Self::History);
 }
 
 /// Resistance to rolling: a torque opposing the relative rotation.
@@ -155,6 +158,9 @@ where
         normal_force: f64,
         dt: f64,
     ) -> Angular<D>;
+
+    /// The history seen from the other grain of the pair.
+    fn flip(history: &mut Self::History);
 }
 
 /// Attraction between grains, in contact and across a gap.
@@ -185,6 +191,8 @@ where
     fn torque(&self, _: &mut (), _: &Touch<D>, _: f64, _: f64) -> Angular<D> {
         Default::default()
     }
+
+    fn flip(_: &mut ()) {}
 }
 
 /// No cohesion.
@@ -235,6 +243,10 @@ where
 
     /// Elastic energy held by one touching pair.
     fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64;
+
+    /// The history of a pair seen from its other grain (when the pair's
+    /// grains swap places in the list).
+    fn flip(history: &mut Self::History);
 }
 
 /// Components acting together: normal, tangential, rolling and cohesion,
@@ -324,6 +336,11 @@ where
     fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64 {
         self.normal.elastic_energy(touch.overlap, touch.r_eff)
             + self.tangential.elastic_energy(&history.0, touch)
+    }
+
+    fn flip(history: &mut Self::History) {
+        T::flip(&mut history.0);
+        R::flip(&mut history.1);
     }
 }
 

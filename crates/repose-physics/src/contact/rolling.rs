@@ -54,6 +54,11 @@ where
         };
         history.torque
     }
+
+    /// The torque on the other grain is the opposite.
+    fn flip(history: &mut Self::History) {
+        history.torque = history.torque * -1.0;
+    }
 }
 
 #[cfg(test)]

@@ -143,6 +143,10 @@ where
         let s = <Dim<D> as Space<D>>::magnitude(history.displacement);
         0.5 * k * s * s
     }
+
+    fn flip(history: &mut Self::History) {
+        history.displacement = <Dim<D> as Space<D>>::shear_flip(history.displacement);
+    }
 }
 
 #[cfg(test)]

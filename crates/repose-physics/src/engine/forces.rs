@@ -1,19 +1,13 @@
 //! The force stages: gravity, every listed pair, every wall contact.
 //!
 //! On one thread each pair's response is added to its two grains as it is
-//! computed. On several, the responses are computed in parallel into a
-//! buffer, and each grain then sums its own pairs in list order: the same
-//! additions in the same order, so the same bits.
+//! computed; on several, `share.rs` adds the same numbers in the same order.
 
 use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response, Touch};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::particles::Particles;
-use rayon::prelude::*;
-
-/// Pairs handed to a thread at a time.
-const PAIRS_PER_TASK: usize = 1024;
 
 /// Below this many listed pairs a step is too short to share: waking the
 /// other threads would cost more than it saves.
@@ -37,11 +31,14 @@ where
 
     /// Gravity and every pair; fails if a pair overlaps beyond the guard.
     pub(super) fn pair_forces(&mut self) -> Result<(), Blowup> {
-        let shared = self.pool.is_some() && self.neighbors.pairs.len() >= PARALLEL_PAIRS;
-        let worst = match (shared, self.periodic.is_some()) {
-            (true, _) => self.pair_forces_parallel(),
-            (false, false) => self.pair_forces_serial::<false>(),
-            (false, true) => self.pair_forces_serial::<true>(),
+        let pool = self
+            .pool
+            .clone()
+            .filter(|_| self.neighbors.pairs.len() >= PARALLEL_PAIRS);
+        let worst = match (pool, self.periodic.is_some()) {
+            (Some(pool), _) => self.pair_forces_shared(&pool),
+            (None, false) => self.pair_forces_serial::<false>(),
+            (None, true) => self.pair_forces_serial::<true>(),
         };
         self.overlap_guard(worst)
     }
@@ -78,51 +75,6 @@ where
             }
         }
         worst
-    }
-
-    /// The same on the thread pool.
-    fn pair_forces_parallel(&mut self) -> (f64, usize) {
-        let Some(pool) = self.pool.clone() else {
-            return self.pair_forces_serial::<false>();
-        };
-        let n = self.particles.len();
-        self.neighbors.build_incidence(n);
-        let Simulation {
-            particles: p,
-            neighbors: nl,
-            responses,
-            pair_law: law,
-            dt,
-            gravity,
-            ..
-        } = self;
-        let (law, dt, gravity) = (*law, *dt, *gravity);
-        responses.resize(nl.pairs.len(), None);
-        let (pairs, shifts) = (&nl.pairs, &nl.shifts);
-        let (incidence, start) = (&nl.incidence, &nl.incidence_start);
-        let history = &mut nl.history;
-        pool.install(|| {
-            let positions = &*p;
-            let worst = responses
-                .par_iter_mut()
-                .zip(history.par_iter_mut())
-                .enumerate()
-                .with_min_len(PAIRS_PER_TASK)
-                .map(|(k, (out, history))| {
-                    let [i, j] = pairs[k];
-                    let (i, j) = (i as usize, j as usize);
-                    let mut r = positions.pos[i] - positions.pos[j];
-                    if !shifts.is_empty() {
-                        r -= shifts[k];
-                    }
-                    let found = pair_response(&law, positions, i, j, r, history, dt);
-                    *out = found.map(|f| f.0);
-                    (found.map_or(0.0, |f| f.1), k)
-                })
-                .reduce(|| (0.0, usize::MAX), worse);
-            sum_by_grain(p, incidence, start, responses, gravity);
-            (worst.0, worst.1.min(pairs.len().saturating_sub(1)))
-        })
     }
 
     fn overlap_guard(&mut self, (worst, pair): (f64, usize)) -> Result<(), Blowup> {
@@ -199,7 +151,7 @@ where
 }
 
 /// The larger overlap of two; on a tie the earlier pair, as one thread finds it.
-fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+pub(super) fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
     if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
         b
     } else {
@@ -211,7 +163,7 @@ fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
 /// fraction of the smaller radius, or `None` if it neither touches nor
 /// attracts across its gap (its history is then reset).
 #[inline(always)]
-fn pair_response<const D: usize, L: ContactLaw<D>>(
+pub(super) fn pair_response<const D: usize, L: ContactLaw<D>>(
     law: &L,
     p: &Particles<D>,
     i: usize,
@@ -240,54 +192,6 @@ where
     let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
     let fraction = touch.overlap / touch.radius_i.min(touch.radius_j);
     Some((law.force(&touch, history, dt), fraction))
-}
-
-/// Each grain's force (gravity first) and torque from its pairs, in list order.
-fn sum_by_grain<const D: usize>(
-    p: &mut Particles<D>,
-    incidence: &[u32],
-    start: &[u32],
-    responses: &[Option<Response<D>>],
-    gravity: Vector<D>,
-) where
-    Dim<D>: Space<D>,
-{
-    let rotating = p.rotating();
-    let Particles {
-        force,
-        torque,
-        mass,
-        load,
-        ..
-    } = p;
-    let mine = |i: usize| &incidence[start[i] as usize..start[i + 1] as usize];
-    force.par_iter_mut().enumerate().for_each(|(i, f)| {
-        let mut sum = gravity * mass[i];
-        if let Some(load) = load.get(i) {
-            sum += load;
-        }
-        for &e in mine(i) {
-            if let Some(r) = &responses[(e / 2) as usize] {
-                if e % 2 == 0 {
-                    sum += r.force;
-                } else {
-                    sum -= r.force;
-                }
-            }
-        }
-        *f = sum;
-    });
-    if rotating {
-        torque.par_iter_mut().enumerate().for_each(|(i, t)| {
-            let mut sum = <Dim<D> as Space<D>>::Angular::default();
-            for &e in mine(i) {
-                if let Some(r) = &responses[(e / 2) as usize] {
-                    sum += if e % 2 == 0 { r.torque_i } else { r.torque_j };
-                }
-            }
-            *t = sum;
-        });
-    }
 }
 
 /// The pair `(i, j)` with `r = x_i − x_j` at distance `dist`, seen from `i`.

@@ -23,6 +23,8 @@
 mod boundary;
 mod energy;
 mod forces;
+mod order;
+mod share;
 
 pub use boundary::{Outlet, Periodic};
 
@@ -160,10 +162,12 @@ where
     /// Largest overlap seen since the last reset, as a fraction of the smaller radius.
     pub max_overlap_seen: f64,
     primed: bool,
+    /// Renumber the grains in space every this many list builds (0: never).
+    pub sort_every: u64,
     /// Threads for the force loop (none: one thread, no pool).
     pool: Option<Arc<rayon::ThreadPool>>,
-    /// Each pair's response of this step (used on several threads).
-    responses: Vec<Option<crate::contact::Response<D>>>,
+    /// How the pairs are shared among the threads, for the current list.
+    shares: share::Shares,
 }
 
 /// How often (in steps) the outlet is checked when nothing else forces it.
@@ -208,8 +212,9 @@ where
             counters: StageCounters::default(),
             max_overlap_seen: 0.0,
             primed: false,
+            sort_every: 0,
             pool: None,
-            responses: Vec::new(),
+            shares: share::Shares::default(),
         }
     }
 
@@ -326,6 +331,9 @@ where
             for x in &mut self.particles.pos {
                 per.wrap(x);
             }
+        }
+        if self.sort_every > 0 && self.neighbors.builds % self.sort_every == 0 {
+            self.sort_spatially();
         }
         self.neighbors
             .rebuild(&self.particles, range, self.periodic.as_ref());

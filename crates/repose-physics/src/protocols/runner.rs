@@ -253,6 +253,7 @@ where
     sim.guards.max_overlap = scene.numerics.max_overlap;
     if let Ok(model) = scene.model() {
         sim.units = model.units();
+        sim.sort_every = model.sort_every();
     }
     // A pool that cannot be built leaves the run on one thread: same results.
     let _ = sim.set_threads(scene.numerics.threads);

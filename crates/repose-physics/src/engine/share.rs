@@ -1,0 +1,293 @@
+//! The pair loop on several threads, with the bits of one thread.
+//!
+//! The grains are cut into contiguous index ranges, one per thread, with
+//! about as many pairs each; after spatial ordering a range is a slab of
+//! space. Pairs are sorted by their first grain, so each range owns a
+//! contiguous block of pairs. A pair whose second grain lies in a later
+//! range crosses. One thread adds its pairs to each grain in list order;
+//! to add the same numbers in the same order:
+//!
+//! 1. every thread computes the responses of its crossing pairs;
+//! 2. every thread starts its grains from gravity (and load), adds what
+//!    the crossing pairs of earlier ranges give them (those pairs come
+//!    first in list order), then walks its own block in order: a pair
+//!    inside the range is computed and added to both grains, a crossing
+//!    pair adds its stored response to its first grain.
+
+use super::forces::{pair_response, worse};
+use super::Simulation;
+use crate::contact::{ContactLaw, Response};
+use crate::dim::{Dim, Space, Vector};
+use crate::integrate::Integrator;
+use crate::particles::Particles;
+use rayon::prelude::*;
+use std::ops::Range;
+
+type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
+
+/// Shares of the grains per thread.
+const SHARES_PER_THREAD: usize = 4;
+
+/// How the current pair list is shared among the threads.
+#[derive(Debug, Default)]
+pub(super) struct Shares {
+    /// The list build (and grain count) these shares were planned for.
+    planned_for: Option<(u64, usize)>,
+    parts: Vec<Share>,
+}
+
+/// One thread's grains and pairs.
+#[derive(Debug, Clone, Default)]
+struct Share {
+    grains: Range<usize>,
+    pairs: Range<usize>,
+    /// Pairs of the block whose second grain lies in a later share, ascending.
+    cross: Vec<usize>,
+    /// Crossing pairs of earlier shares that end in this one, as
+    /// (share, index into its `cross`), sorted by (second grain, pair).
+    incoming: Vec<(usize, usize)>,
+}
+
+impl Shares {
+    /// Cuts `n` grains and their sorted `pairs` into `count` shares.
+    fn plan(pairs: &[[u32; 2]], n: usize, count: usize) -> Vec<Share> {
+        let total = pairs.len();
+        let mut bounds = vec![0usize];
+        for t in 1..count {
+            let k = t * total / count;
+            let start = pairs.get(k).map_or(n, |p| p[0] as usize);
+            bounds.push(start.max(*bounds.last().unwrap_or(&0)));
+        }
+        bounds.push(n);
+        let mut parts: Vec<Share> = bounds
+            .windows(2)
+            .map(|w| {
+                let first = pairs.partition_point(|p| (p[0] as usize) < w[0]);
+                let last = pairs.partition_point(|p| (p[0] as usize) < w[1]);
+                let cross = (first..last)
+                    .filter(|&k| pairs[k][1] as usize >= w[1])
+                    .collect();
+                Share {
+                    grains: w[0]..w[1],
+                    pairs: first..last,
+                    cross,
+                    incoming: Vec::new(),
+                }
+            })
+            .collect();
+        let owner = |g: usize| bounds[1..].partition_point(|&b| b <= g);
+        // (second grain, pair, share, index into the share's crossing pairs)
+        let mut incoming: Vec<Vec<(usize, usize, usize, usize)>> = vec![Vec::new(); parts.len()];
+        for (t, share) in parts.iter().enumerate() {
+            for (idx, &k) in share.cross.iter().enumerate() {
+                let j = pairs[k][1] as usize;
+                incoming[owner(j)].push((j, k, t, idx));
+            }
+        }
+        for (share, mut list) in parts.iter_mut().zip(incoming) {
+            list.sort_unstable_by_key(|e| (e.0, e.1));
+            share.incoming = list.into_iter().map(|e| (e.2, e.3)).collect();
+        }
+        parts
+    }
+}
+
+impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
+where
+    Dim<D>: Space<D>,
+{
+    /// Gravity and every pair on the thread pool; returns the largest
+    /// overlap fraction and its pair.
+    pub(super) fn pair_forces_shared(&mut self, pool: &rayon::ThreadPool) -> (f64, usize) {
+        let n = self.particles.len();
+        let key = (self.neighbors.builds, n);
+        if self.shares.planned_for != Some(key) {
+            // More shares than threads: the pool balances shares of unequal
+            // cost (a dense bed below, falling grains above).
+            let shares = SHARES_PER_THREAD * pool.current_num_threads();
+            self.shares.parts = Shares::plan(&self.neighbors.pairs, n, shares);
+            self.shares.planned_for = Some(key);
+        }
+        // Forces and torques are written share by share; everything else is read.
+        let mut force = std::mem::take(&mut self.particles.force);
+        let mut torque = std::mem::take(&mut self.particles.torque);
+        let ctx = Context {
+            p: &self.particles,
+            law: self.pair_law,
+            dt: self.dt,
+            gravity: self.gravity,
+            pairs: &self.neighbors.pairs,
+            shifts: &self.neighbors.shifts,
+            parts: &self.shares.parts,
+        };
+        let history = &mut self.neighbors.history;
+        let worst = pool.install(|| ctx.run(history, &mut force, &mut torque));
+        self.particles.force = force;
+        self.particles.torque = torque;
+        worst
+    }
+}
+
+/// What every share reads.
+struct Context<'a, const D: usize, L: ContactLaw<D>>
+where
+    Dim<D>: Space<D>,
+{
+    p: &'a Particles<D>,
+    law: L,
+    dt: f64,
+    gravity: Vector<D>,
+    pairs: &'a [[u32; 2]],
+    shifts: &'a [Vector<D>],
+    parts: &'a [Share],
+}
+
+/// Cuts `v` into consecutive pieces of the given ranges (empty if `v` is).
+fn pieces<'v, T>(
+    mut v: &'v mut [T],
+    ranges: impl Iterator<Item = Range<usize>>,
+) -> Vec<&'v mut [T]> {
+    let mut out = Vec::new();
+    let mut at = 0;
+    for r in ranges {
+        if v.is_empty() {
+            out.push(v);
+            v = &mut [];
+            continue;
+        }
+        let (_, rest) = std::mem::take(&mut v).split_at_mut(r.start - at);
+        let (mine, rest) = rest.split_at_mut(r.end - r.start);
+        out.push(mine);
+        v = rest;
+        at = r.end;
+    }
+    out
+}
+
+impl<const D: usize, L: ContactLaw<D>> Context<'_, D, L>
+where
+    Dim<D>: Space<D>,
+{
+    fn run(
+        &self,
+        history: &mut [L::History],
+        force: &mut [Vector<D>],
+        torque: &mut [Angular<D>],
+    ) -> (f64, usize) {
+        let blocks = || self.parts.iter().map(|s| s.pairs.clone());
+        let mut hist = pieces(history, blocks());
+        // 1. The crossing pairs.
+        let crossing: Vec<(Vec<Option<Response<D>>>, (f64, usize))> = hist
+            .par_iter_mut()
+            .zip(self.parts)
+            .map(|(h, share)| self.crossing(share, h))
+            .collect();
+        // 2. Each share's grains.
+        let grains = || self.parts.iter().map(|s| s.grains.clone());
+        let forces = pieces(force, grains());
+        let torques = pieces(torque, grains());
+        let responses: Vec<&[Option<Response<D>>]> = crossing.iter().map(|c| &c.0[..]).collect();
+        let inner = hist
+            .into_par_iter()
+            .zip(forces)
+            .zip(torques)
+            .zip(self.parts)
+            .enumerate()
+            .map(|(t, (((h, f), tq), share))| self.own(t, share, h, f, tq, &responses))
+            .reduce(|| (0.0, usize::MAX), worse);
+        crossing.iter().map(|c| c.1).fold(inner, worse)
+    }
+
+    fn separation(&self, k: usize, i: usize, j: usize) -> Vector<D> {
+        let r = self.p.pos[i] - self.p.pos[j];
+        if self.shifts.is_empty() {
+            r
+        } else {
+            r - self.shifts[k]
+        }
+    }
+
+    /// Responses of a share's crossing pairs.
+    fn crossing(
+        &self,
+        share: &Share,
+        history: &mut [L::History],
+    ) -> (Vec<Option<Response<D>>>, (f64, usize)) {
+        let mut worst = (0.0, usize::MAX);
+        let out = share
+            .cross
+            .iter()
+            .map(|&k| {
+                let [i, j] = self.pairs[k];
+                let (i, j) = (i as usize, j as usize);
+                let r = self.separation(k, i, j);
+                let h = &mut history[k - share.pairs.start];
+                let found = pair_response(&self.law, self.p, i, j, r, h, self.dt);
+                if let Some((_, fraction)) = found {
+                    worst = worse(worst, (fraction, k));
+                }
+                found.map(|f| f.0)
+            })
+            .collect();
+        (out, worst)
+    }
+
+    /// A share's grains: gravity, what earlier shares give them, its own block.
+    fn own(
+        &self,
+        t: usize,
+        share: &Share,
+        history: &mut [L::History],
+        force: &mut [Vector<D>],
+        torque: &mut [Angular<D>],
+        responses: &[&[Option<Response<D>>]],
+    ) -> (f64, usize) {
+        let p = self.p;
+        let g0 = share.grains.start;
+        for (x, f) in share.grains.clone().zip(force.iter_mut()) {
+            *f = self.gravity * p.mass[x];
+            if let Some(load) = p.load.get(x) {
+                *f += load;
+            }
+        }
+        torque.fill(Default::default());
+        for &(from, idx) in &share.incoming {
+            let k = self.parts[from].cross[idx];
+            if let Some(r) = &responses[from][idx] {
+                let j = self.pairs[k][1] as usize - g0;
+                force[j] -= r.force;
+                if L::ROTATES {
+                    torque[j] += r.torque_j;
+                }
+            }
+        }
+        let mut worst = (0.0, usize::MAX);
+        let mut c = 0;
+        for k in share.pairs.clone() {
+            let [i, j] = self.pairs[k];
+            let (i, j) = (i as usize, j as usize);
+            if share.cross.get(c) == Some(&k) {
+                if let Some(r) = &responses[t][c] {
+                    force[i - g0] += r.force;
+                    if L::ROTATES {
+                        torque[i - g0] += r.torque_i;
+                    }
+                }
+                c += 1;
+                continue;
+            }
+            let r = self.separation(k, i, j);
+            let h = &mut history[k - share.pairs.start];
+            if let Some((resp, fraction)) = pair_response(&self.law, p, i, j, r, h, self.dt) {
+                worst = worse(worst, (fraction, k));
+                force[i - g0] += resp.force;
+                force[j - g0] -= resp.force;
+                if L::ROTATES {
+                    torque[i - g0] += resp.torque_i;
+                    torque[j - g0] += resp.torque_j;
+                }
+            }
+        }
+        worst
+    }
+}
