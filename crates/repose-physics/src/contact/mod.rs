@@ -174,6 +174,10 @@ where
     fn range(&self) -> f64;
     /// Size of the attraction (pulling `i` towards `j`) for this pair.
     fn attraction(&self, touch: &Touch<D>) -> f64;
+
+    /// Work the attraction does on a pair of effective radius `r_eff`
+    /// brought from out of its range to an overlap `depth`.
+    fn work(&self, r_eff: f64, depth: f64) -> f64;
 }
 
 /// No rolling resistance.
@@ -213,6 +217,10 @@ where
     fn attraction(&self, _: &Touch<D>) -> f64 {
         0.0
     }
+
+    fn work(&self, _: f64, _: f64) -> f64 {
+        0.0
+    }
 }
 
 /// A full contact law: force and torques on a pair, and per-contact history.
@@ -240,6 +248,10 @@ where
 
     /// Largest gap across which the law acts (0 for contact-only laws).
     fn range(&self) -> f64;
+
+    /// Work an attraction does on a pair of effective radius `r_eff`
+    /// pulled from out of range to an overlap `depth` (0 without one).
+    fn bond_work(&self, r_eff: f64, depth: f64) -> f64;
 
     /// Elastic energy held by one touching pair.
     fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64;
@@ -331,6 +343,10 @@ where
         } else {
             0.0
         }
+    }
+
+    fn bond_work(&self, r_eff: f64, depth: f64) -> f64 {
+        self.cohesion.work(r_eff, depth)
     }
 
     fn elastic_energy(&self, touch: &Touch<D>, history: &Self::History) -> f64 {

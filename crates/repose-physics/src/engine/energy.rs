@@ -51,9 +51,11 @@ where
     }
 
     /// Arms the energy guard. A grain that moves within a region of size
-    /// `extent` under gravity can gain at most `|g|·extent` per unit mass, and
-    /// the stored kinetic and elastic energy can only be released once; a
-    /// kinetic energy above twice that budget can only come from the
+    /// `extent` under gravity can gain at most `|g|·extent` per unit mass;
+    /// cohesion can give it at most the work of pulling its neighbours (at
+    /// most twelve) from out of range to the deepest overlap the guards
+    /// allow; and the stored kinetic and elastic energy can only be released
+    /// once. A kinetic energy above twice that budget can only come from the
     /// integrator itself, so [`Simulation::check_energy`] fails the run.
     pub fn set_energy_budget(&mut self, extent: f64) {
         self.rebuild_lists();
@@ -62,12 +64,29 @@ where
         self.guards.energy_offset = 2.0 * stored;
     }
 
+    /// What cohesion can give the grains there are now: six bonds per
+    /// grain (twelve neighbours, each bond shared), each pulled from out of
+    /// range to the deepest overlap the guards allow.
+    fn bond_allowance(&self) -> f64 {
+        if !L::ACTS_ACROSS_GAPS {
+            return 0.0;
+        }
+        let p = &self.particles;
+        let depth = self.guards.max_overlap;
+        (0..p.len())
+            .map(|i| 6.0 * self.pair_law.bond_work(0.5 * p.radius[i], depth * p.radius[i]))
+            .sum()
+    }
+
     /// Fails with [`Blowup::Energy`] when the kinetic energy exceeds the budget.
     pub fn check_energy(&self) -> Result<(), Blowup> {
         let p = &self.particles;
         let kinetic = p.kinetic_energy();
         let mass: f64 = p.mass.iter().sum();
-        let limit = self.guards.energy_per_mass * mass + self.guards.energy_offset;
+        let mut limit = self.guards.energy_per_mass * mass + self.guards.energy_offset;
+        if L::ACTS_ACROSS_GAPS {
+            limit += 2.0 * self.bond_allowance();
+        }
         // A budget of zero (no gravity, nothing moving) still allows rounding.
         if kinetic > limit * (1.0 + 1e-9) + f64::MIN_POSITIVE || kinetic.is_nan() {
             return Err(Blowup::Energy {

@@ -9,10 +9,6 @@ use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::particles::Particles;
 
-/// Below this many listed pairs a step is too short to share: waking the
-/// other threads would cost more than it saves.
-const PARALLEL_PAIRS: usize = 8192;
-
 impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
 where
     Dim<D>: Space<D>,
@@ -34,7 +30,7 @@ where
         let pool = self
             .pool
             .clone()
-            .filter(|_| self.neighbors.pairs.len() >= PARALLEL_PAIRS);
+            .filter(|_| self.neighbors.pairs.len() >= self.min_shared_pairs);
         let worst = match (pool, self.periodic.is_some()) {
             (Some(pool), _) => self.pair_forces_shared(&pool),
             (None, false) => self.pair_forces_serial::<false>(),

@@ -164,6 +164,9 @@ where
     primed: bool,
     /// Renumber the grains in space every this many list builds (0: never).
     pub sort_every: u64,
+    /// Below this many listed pairs a step is too short to share among
+    /// threads: waking them would cost more than it saves.
+    pub min_shared_pairs: usize,
     /// Threads for the force loop (none: one thread, no pool).
     pool: Option<Arc<rayon::ThreadPool>>,
     /// How the pairs are shared among the threads, for the current list.
@@ -213,6 +216,7 @@ where
             max_overlap_seen: 0.0,
             primed: false,
             sort_every: 0,
+            min_shared_pairs: 8192,
             pool: None,
             shares: share::Shares::default(),
         }

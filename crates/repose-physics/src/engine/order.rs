@@ -15,7 +15,7 @@ where
 {
     /// Renumbers the grains in the order of the cells they lie in, one
     /// cell two largest diameters wide; grains in one cell keep their order.
-    pub(super) fn sort_spatially(&mut self) {
+    pub fn sort_spatially(&mut self) {
         let p = &self.particles;
         let n = p.len();
         if n < 2 {

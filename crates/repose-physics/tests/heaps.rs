@@ -1,0 +1,226 @@
+//! Poured heaps and packed columns of spheres (Elekes & Parteli): the
+//! protocols end in a measured heap or a recorded outcome, periodic faces
+//! are seamless, and neither threads nor the spatial renumbering of grains
+//! changes what a scene computes. Small, softened scenes: a paper-stiff
+//! heap costs 10¹¹ particle-steps.
+
+use repose_physics::contact::{Epsd2, NoCohesion};
+use repose_physics::dim::Vector;
+use repose_physics::engine::Simulation;
+use repose_physics::integrate::VelocityVerlet;
+use repose_physics::models::elekes_parteli::{self, law, Law, Parts};
+use repose_physics::particles::Particles;
+use repose_physics::walls::Wall;
+use repose_physics::{run, Outcome, Quiet, RunReport, Scene};
+
+/// A small heap of 1 mm glass beads softened to κ = 10⁵ (Y ≈ 2.5 MPa).
+const SMALL_HEAP: &str = r#"
+protocol = "heap"
+preset = "quick"
+[material]
+surface_energy = 0.0
+[heap]
+plate = 20
+max_grains = 1500
+"#;
+
+fn heap(extra: &[&str]) -> RunReport {
+    let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::from_toml(SMALL_HEAP, &o).unwrap();
+    run(&scene, &mut Quiet).unwrap()
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_small_cohesionless_heap_stands_at_a_finite_angle_and_repeats_bit_for_bit() {
+    let r = heap(&["seed=3"]);
+    assert!(r.outcome.is_completed(), "{:?}", r.outcome);
+    let m = |k: &str| r.metric(k).unwrap();
+    println!(
+        "θ_r {:.2}° ± {:.2}°, footprint {:.2}°, {} grains, height {:.1} d, roughness {:.2} d",
+        m("theta_r"),
+        m("theta_r_sd"),
+        m("theta_r_footprint"),
+        m("heap_grains"),
+        m("heap_height"),
+        m("surface_roughness")
+    );
+    assert!((15.0..35.0).contains(&m("theta_r")));
+    assert!(m("theta_r_sd") < 3.0);
+    assert!(m("theta_r_footprint") >= m("theta_r") - 1e-9);
+    assert!(m("heap_grains") > 200.0);
+    let g = &r.grains;
+    assert_eq!(g.inserted, 1500);
+    assert_eq!(g.lost + g.remaining, g.inserted);
+    assert_eq!(r.profiles.len(), 2);
+    // The same scene and seed, on two threads: the same numbers.
+    let again = heap(&["seed=3", "numerics.threads=2"]);
+    assert_eq!(again.metrics, r.metrics);
+    assert_eq!(again.iterations, r.iterations);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn the_outcomes_of_a_heap_that_cannot_be_measured_say_why() {
+    // Softened grains with the full surface energy stick on first touch:
+    // they build a tower under the inlet that reaches the top.
+    let r = heap(&[
+        "material.surface_energy=0.05",
+        "material.youngs_modulus=6.3e6",
+        "heap.height=16",
+        "heap.inlet_floor=8",
+        "heap.max_grains=3000",
+    ]);
+    match &r.outcome {
+        Outcome::Unmeasurable { reason } => assert!(reason.contains("crest reached the top"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(r.metrics.is_empty());
+    // A pour given no time to settle.
+    let r = heap(&["heap.max_grains=300", "heap.settle_min=0", "heap.settle_max=0.5"]);
+    match &r.outcome {
+        Outcome::NotSettled { phase, reason } => {
+            assert_eq!(phase, "settle");
+            assert!(reason.contains("still moved"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // A step far above the stability limit of Gear-5.
+    let r = heap(&["numerics.integrator=\"gear5\"", "numerics.dt_factor=0.4"]);
+    match &r.outcome {
+        Outcome::Failed { phase, reason } => {
+            assert_eq!(phase, "pour");
+            assert!(!reason.is_empty());
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+fn packing(extra: &[&str]) -> RunReport {
+    let base = "protocol = \"packing\"\npreset = \"quick\"\n[packing]\nwidth = 6\nheight = 30\n";
+    let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    run(&Scene::from_toml(base, &o).unwrap(), &mut Quiet).unwrap()
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn spheres_released_in_a_periodic_column_pack_randomly_and_cohesion_loosens_them() {
+    let dry = packing(&["material.surface_energy=0"]);
+    assert!(dry.outcome.is_completed(), "{:?}", dry.outcome);
+    let phi = dry.metric("packing_fraction").unwrap();
+    println!("dry: φ = {phi:.3} ± {:.3}", dry.metric("packing_fraction_sd").unwrap());
+    // Between random loose and random close packing of frictional spheres.
+    assert!((0.54..0.66).contains(&phi), "{phi}");
+    assert_eq!(dry.grains.lost, 0);
+    let sticky = packing(&["material.youngs_modulus=6.3e6", "grains.diameter=5e-4"]);
+    assert!(sticky.outcome.is_completed(), "{:?}", sticky.outcome);
+    let loose = sticky.metric("packing_fraction").unwrap();
+    println!("cohesive (0.5 mm, γ = 0.05): φ = {loose:.3}");
+    assert!(loose < phi - 0.05, "{loose} {phi}");
+}
+
+fn parts(extra: &[&str]) -> (Parts, Parts) {
+    let base = "protocol = \"free_run\"\ndimension = 3\nduration = 1.0\n\
+                [material]\nyoungs_modulus = 1e7\nsurface_energy = 0.0\n\
+                [[particles]]\nposition = [0.0, 0.0, 0.0]\nradius = 0.0005\n";
+    let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    elekes_parteli::parts(&Scene::from_toml(base, &o).unwrap()).unwrap()
+}
+
+type Engine = Simulation<3, Law<Epsd2, NoCohesion, true>, VelocityVerlet>;
+
+fn engine(grains: &[(Vector<3>, Vector<3>)], gravity: f64, floor: bool) -> Engine {
+    let (pair, plate) = parts(&[]);
+    let d = 1e-3;
+    let mass = std::f64::consts::PI / 6.0 * 2500.0 * d * d * d;
+    let mut p = Particles::<3>::new(true);
+    for (x, v) in grains {
+        p.push(*x, *v, 0.5 * d, mass);
+    }
+    let walls = if floor {
+        let w = Wall::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
+        vec![(w, law(&plate))]
+    } else {
+        Vec::new()
+    };
+    let g = Vector::<3>::new(0.0, 0.0, -gravity);
+    Simulation::new(p, walls, g, law(&pair), 2e-6, 2e-4)
+}
+
+#[test]
+fn a_collision_across_a_periodic_face_is_the_same_collision() {
+    let v = Vector::<3>::new(0.3, 0.05, 0.0);
+    let x = 0.55e-3;
+    // Two spheres meeting in the middle of open space ...
+    let mut open = engine(&[(Vector::<3>::new(-x, 0.0, 0.0), v), (Vector::<3>::new(x, 0.0, 0.0), -v)], 0.0, false);
+    // ... and the same two at the faces of a periodic cell, moving out of it.
+    let l = 0.01;
+    let mut cell = engine(
+        &[(Vector::<3>::new(x, 0.005, 0.0), -v), (Vector::<3>::new(l - x, 0.005, 0.0), v)],
+        0.0,
+        false,
+    );
+    cell.set_periodic(Vector::<3>::zeros(), [l, l, 0.0]).unwrap();
+    open.run(2000).unwrap();
+    cell.run(2000).unwrap();
+    let rel = |s: &Engine, a: usize, b: usize| s.particles.vel[a] - s.particles.vel[b];
+    let (o, c) = (rel(&open, 1, 0), rel(&cell, 0, 1));
+    println!("after: open {o:?}, across the face {c:?}");
+    assert!((o - c).norm() < 1e-9 * v.norm(), "{o:?} {c:?}");
+    assert!(o.x > 0.0, "they bounced");
+    let spin = |s: &Engine, i: usize| s.particles.omega[i];
+    assert!((spin(&open, 0) - spin(&cell, 1)).norm() < 1e-6 * spin(&open, 0).norm());
+}
+
+/// A bed of spheres on a floor, periodic sideways, settling for a while.
+fn bed() -> Engine {
+    let d = 1e-3;
+    let mut grains = Vec::new();
+    for k in 0..1200 {
+        let (ix, iy, iz) = (k % 10, (k / 10) % 10, k / 100);
+        let jitter = ((k * 7919) % 13) as f64 * 0.01 * d;
+        let x = Vector::<3>::new((ix as f64 + 0.5) * 1.2 * d + jitter, (iy as f64 + 0.5) * 1.2 * d, (iz as f64 + 0.6) * 1.2 * d);
+        grains.push((x, Vector::<3>::new(0.0, 0.0, -0.5)));
+    }
+    let mut s = engine(&grains, 9.81, true);
+    s.set_periodic(Vector::<3>::zeros(), [12.0 * d, 12.0 * d, 0.0]).unwrap();
+    s
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn threads_share_the_pair_loop_without_changing_a_bit() {
+    let mut one = bed();
+    let mut two = bed();
+    two.set_threads(2).unwrap();
+    two.min_shared_pairs = 0;
+    for s in [&mut one, &mut two] {
+        s.sort_every = 5;
+        s.run(8000).unwrap();
+    }
+    let touching = one.contact_forces().len();
+    println!("{touching} contacts");
+    assert!(touching > 500);
+    assert_eq!(one.particles.pos, two.particles.pos);
+    assert_eq!(one.particles.vel, two.particles.vel);
+    assert_eq!(one.particles.omega, two.particles.omega);
+    assert_eq!(one.neighbors.history, two.neighbors.history);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn renumbering_grains_in_space_keeps_every_contact_and_its_springs() {
+    let mut s = bed();
+    s.run(6000).unwrap();
+    s.rebuild_lists();
+    let before = (s.elastic_energy(), s.contact_forces().len());
+    let ids = s.particles.id.clone();
+    s.sort_spatially();
+    s.rebuild_lists();
+    let after = (s.elastic_energy(), s.contact_forces().len());
+    assert_ne!(s.particles.id, ids, "the order changed");
+    assert_eq!(before.1, after.1);
+    assert!((before.0 - after.0).abs() < 1e-12 * before.0, "{before:?} {after:?}");
+    // and the run goes on from there
+    s.run(100).unwrap();
+}
