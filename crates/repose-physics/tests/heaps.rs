@@ -72,12 +72,18 @@ fn the_outcomes_of_a_heap_that_cannot_be_measured_say_why() {
         "heap.max_grains=3000",
     ]);
     match &r.outcome {
-        Outcome::Unmeasurable { reason } => assert!(reason.contains("crest reached the top"), "{reason}"),
+        Outcome::Unmeasurable { reason } => {
+            assert!(reason.contains("crest reached the top"), "{reason}")
+        }
         other => panic!("{other:?}"),
     }
     assert!(r.metrics.is_empty());
     // A pour given no time to settle.
-    let r = heap(&["heap.max_grains=300", "heap.settle_min=0", "heap.settle_max=0.5"]);
+    let r = heap(&[
+        "heap.max_grains=300",
+        "heap.settle_min=0",
+        "heap.settle_max=0.5",
+    ]);
     match &r.outcome {
         Outcome::NotSettled { phase, reason } => {
             assert_eq!(phase, "settle");
@@ -108,7 +114,10 @@ fn spheres_released_in_a_periodic_column_pack_randomly_and_cohesion_loosens_them
     let dry = packing(&["material.surface_energy=0"]);
     assert!(dry.outcome.is_completed(), "{:?}", dry.outcome);
     let phi = dry.metric("packing_fraction").unwrap();
-    println!("dry: φ = {phi:.3} ± {:.3}", dry.metric("packing_fraction_sd").unwrap());
+    println!(
+        "dry: φ = {phi:.3} ± {:.3}",
+        dry.metric("packing_fraction_sd").unwrap()
+    );
     // Between random loose and random close packing of frictional spheres.
     assert!((0.54..0.66).contains(&phi), "{phi}");
     assert_eq!(dry.grains.lost, 0);
@@ -152,15 +161,26 @@ fn a_collision_across_a_periodic_face_is_the_same_collision() {
     let v = Vector::<3>::new(0.3, 0.05, 0.0);
     let x = 0.55e-3;
     // Two spheres meeting in the middle of open space ...
-    let mut open = engine(&[(Vector::<3>::new(-x, 0.0, 0.0), v), (Vector::<3>::new(x, 0.0, 0.0), -v)], 0.0, false);
-    // ... and the same two at the faces of a periodic cell, moving out of it.
-    let l = 0.01;
-    let mut cell = engine(
-        &[(Vector::<3>::new(x, 0.005, 0.0), -v), (Vector::<3>::new(l - x, 0.005, 0.0), v)],
+    let mut open = engine(
+        &[
+            (Vector::<3>::new(-x, 0.0, 0.0), v),
+            (Vector::<3>::new(x, 0.0, 0.0), -v),
+        ],
         0.0,
         false,
     );
-    cell.set_periodic(Vector::<3>::zeros(), [l, l, 0.0]).unwrap();
+    // ... and the same two at the faces of a periodic cell, moving out of it.
+    let l = 0.01;
+    let mut cell = engine(
+        &[
+            (Vector::<3>::new(x, 0.005, 0.0), -v),
+            (Vector::<3>::new(l - x, 0.005, 0.0), v),
+        ],
+        0.0,
+        false,
+    );
+    cell.set_periodic(Vector::<3>::zeros(), [l, l, 0.0])
+        .unwrap();
     open.run(2000).unwrap();
     cell.run(2000).unwrap();
     let rel = |s: &Engine, a: usize, b: usize| s.particles.vel[a] - s.particles.vel[b];
@@ -179,11 +199,16 @@ fn bed() -> Engine {
     for k in 0..1200 {
         let (ix, iy, iz) = (k % 10, (k / 10) % 10, k / 100);
         let jitter = ((k * 7919) % 13) as f64 * 0.01 * d;
-        let x = Vector::<3>::new((ix as f64 + 0.5) * 1.2 * d + jitter, (iy as f64 + 0.5) * 1.2 * d, (iz as f64 + 0.6) * 1.2 * d);
+        let x = Vector::<3>::new(
+            (ix as f64 + 0.5) * 1.2 * d + jitter,
+            (iy as f64 + 0.5) * 1.2 * d,
+            (iz as f64 + 0.6) * 1.2 * d,
+        );
         grains.push((x, Vector::<3>::new(0.0, 0.0, -0.5)));
     }
     let mut s = engine(&grains, 9.81, true);
-    s.set_periodic(Vector::<3>::zeros(), [12.0 * d, 12.0 * d, 0.0]).unwrap();
+    s.set_periodic(Vector::<3>::zeros(), [12.0 * d, 12.0 * d, 0.0])
+        .unwrap();
     s
 }
 
@@ -220,7 +245,10 @@ fn renumbering_grains_in_space_keeps_every_contact_and_its_springs() {
     let after = (s.elastic_energy(), s.contact_forces().len());
     assert_ne!(s.particles.id, ids, "the order changed");
     assert_eq!(before.1, after.1);
-    assert!((before.0 - after.0).abs() < 1e-12 * before.0, "{before:?} {after:?}");
+    assert!(
+        (before.0 - after.0).abs() < 1e-12 * before.0,
+        "{before:?} {after:?}"
+    );
     // and the run goes on from there
     s.run(100).unwrap();
 }

@@ -53,7 +53,8 @@ where
     /// `∫ F ds` across the gap, `A_H R (1/D_min − 1/(D_max + D_min)) / 6`,
     /// plus the constant contact value times the depth.
     fn work(&self, r_eff: f64, depth: f64) -> f64 {
-        let across = self.hamaker * r_eff / 6.0 * (1.0 / self.d_min - 1.0 / (self.d_max + self.d_min));
+        let across =
+            self.hamaker * r_eff / 6.0 * (1.0 / self.d_min - 1.0 / (self.d_max + self.d_min));
         across + self.at(r_eff, 0.0) * depth.max(0.0)
     }
 }

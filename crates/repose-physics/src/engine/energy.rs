@@ -74,7 +74,11 @@ where
         let p = &self.particles;
         let depth = self.guards.max_overlap;
         (0..p.len())
-            .map(|i| 6.0 * self.pair_law.bond_work(0.5 * p.radius[i], depth * p.radius[i]))
+            .map(|i| {
+                6.0 * self
+                    .pair_law
+                    .bond_work(0.5 * p.radius[i], depth * p.radius[i])
+            })
             .sum()
     }
 

@@ -166,15 +166,21 @@ pub const GLASS_MODULUS: f64 = 63e9;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Material {
-    /// Young's modulus `Y`, Pa; 63 GPa unless `kappa` softens it.
+    /// Young's modulus `Y`, Pa; the true modulus unless `kappa` or
+    /// `kappa_cohesion` soften it.
     pub youngs_modulus: Option<f64>,
     /// Softening by the stiffness number `κ = Y/(ρ g d)`: where
     /// `youngs_modulus` is not given, `Y = κ ρ g d`. Two scenes with the
     /// same `κ` (and no cohesion) are one scene on another clock.
     pub kappa: Option<f64>,
+    /// The least cohesion number `κ_c = Y d/(π γ)` a softened modulus keeps:
+    /// cohesion presses contacts to an overlap of about `(2.8/κ_c)^{2/3} d`,
+    /// so softening stops where that would be too deep.
+    pub kappa_cohesion: Option<f64>,
     /// How `γ` follows a softened modulus.
     pub cohesion_scaling: CohesionScaling,
-    /// The real material's modulus, the reference of `cohesion_scaling`, Pa.
+    /// The real material's modulus (glass's by default), the reference of
+    /// softening and of `cohesion_scaling`, Pa.
     pub true_modulus: f64,
     /// Poisson's ratio `ν`.
     pub poisson_ratio: f64,
@@ -205,6 +211,7 @@ impl Default for Material {
         Material {
             youngs_modulus: None,
             kappa: None,
+            kappa_cohesion: None,
             cohesion_scaling: CohesionScaling::None,
             true_modulus: GLASS_MODULUS,
             poisson_ratio: 0.24,
@@ -236,6 +243,9 @@ impl Section for Material {
         if let Some(k) = self.kappa {
             c.positive("material.kappa", k);
         }
+        if let Some(k) = self.kappa_cohesion {
+            c.positive("material.kappa_cohesion", k);
+        }
         c.positive("material.true_modulus", self.true_modulus);
         c.finite("material.poisson_ratio", self.poisson_ratio);
         if !(0.0..0.5).contains(&self.poisson_ratio) {
@@ -261,12 +271,26 @@ impl Section for Material {
 }
 
 impl Material {
-    /// The modulus simulated: the given one, or `κ ρ g d`, or glass's.
+    /// The modulus simulated: the given one; or softened to the larger of
+    /// `κ ρ g d` and `κ_c π γ / d` (those set), never stiffer than the true
+    /// modulus; or the true modulus.
     pub fn modulus(&self, grains: &Grains, g: f64) -> f64 {
-        match (self.youngs_modulus, self.kappa) {
-            (Some(y), _) => y,
-            (None, Some(k)) => k * grains.density * g * grains.diameter,
-            (None, None) => GLASS_MODULUS,
+        if let Some(y) = self.youngs_modulus {
+            return y;
+        }
+        let d = grains.diameter;
+        let gravity = self.kappa.map(|k| k * grains.density * g * d);
+        let cohesion = self
+            .kappa_cohesion
+            .map(|k| k * std::f64::consts::PI * self.surface_energy / d);
+        match [gravity, cohesion]
+            .into_iter()
+            .flatten()
+            .filter(|y| *y > 0.0)
+            .reduce(f64::max)
+        {
+            Some(y) => y.min(self.true_modulus),
+            None => self.true_modulus,
         }
     }
 
@@ -281,6 +305,7 @@ impl Material {
         Material {
             youngs_modulus: Some(y),
             kappa: None,
+            kappa_cohesion: None,
             cohesion_scaling: CohesionScaling::None,
             surface_energy: gamma,
             ..self.clone()
@@ -288,7 +313,7 @@ impl Material {
     }
 
     fn youngs(&self) -> f64 {
-        self.youngs_modulus.unwrap_or(GLASS_MODULUS)
+        self.youngs_modulus.unwrap_or(self.true_modulus)
     }
 
     /// `2Y / (3(1 − ν²))`: the normal stiffness per `√R_eff`.
@@ -573,7 +598,7 @@ impl Model for ElekesParteli {
             return f64::NAN;
         };
         let d = grains.diameter_range().0;
-        let v = scene.numerics.reference_speed;
+        let v = scene.impact_speed();
         let pair = Kind::pair(&grains, d).collision_time(&m, v);
         let plate = Kind::plate(&grains, d).collision_time(&m, v);
         pair.min(plate)

@@ -192,6 +192,13 @@ impl Protocol for Heap {
         pour::check_scene(scene, c);
     }
 
+    /// A grain falling the whole height of the domain.
+    fn impact_speed(&self, scene: &Scene) -> Option<f64> {
+        let spec: HeapSpec = scene.section().ok()?;
+        let d = scene.section::<Grains>().ok()?.diameter;
+        pour::fall_speed(scene, spec.height * d)
+    }
+
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
         let spec: HeapSpec = scene.section()?;
         let scales = Scales::of(scene)?;

@@ -71,6 +71,12 @@ pub trait Protocol: Sync {
     fn check(&self, scene: &Scene, c: &mut Checks);
     /// Writes out the values derived from others.
     fn resolve(&self, _scene: &mut Scene) {}
+    /// The fastest impact the protocol makes happen, if it knows one (a
+    /// grain falling from the top of its domain): the time step resolves
+    /// collisions at this speed when it exceeds the reference speed.
+    fn impact_speed(&self, _scene: &Scene) -> Option<f64> {
+        None
+    }
     /// Runs a validated, resolved scene.
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError>;
 }

@@ -169,6 +169,13 @@ impl Protocol for Packing {
         pour::check_scene(scene, c);
     }
 
+    /// A grain falling the whole height of the domain.
+    fn impact_speed(&self, scene: &Scene) -> Option<f64> {
+        let spec: PackingSpec = scene.section().ok()?;
+        let d = scene.section::<Grains>().ok()?.diameter;
+        pour::fall_speed(scene, spec.height * d)
+    }
+
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
         let spec: PackingSpec = scene.section()?;
         let scales = Scales::of(scene)?;

@@ -45,6 +45,12 @@ impl Scales {
     }
 }
 
+/// The speed of a grain that falls `height` (m) under the scene's gravity.
+pub fn fall_speed(scene: &Scene, height: f64) -> Option<f64> {
+    let scales = Scales::of(scene).ok()?;
+    Some((2.0 * scales.g * height).sqrt())
+}
+
 /// Gravity must point straight down the z axis.
 pub fn check_gravity_down(scene: &Scene, c: &mut Checks) {
     if let [gx, gy, gz] = scene.gravity[..] {
@@ -272,8 +278,9 @@ pub fn check_scene(scene: &Scene, c: &mut Checks) {
 }
 
 /// The settings the fidelity presets give the 3D protocols: a softened
-/// modulus by its stiffness number `κ = Y/(ρ g d)` (where the scene gives
-/// no modulus) and the time step; `paper` is glass's 63 GPa. The biases
+/// modulus by its stiffness number `κ = Y/(ρ g d)`, kept stiff enough for
+/// cohesion by `κ_c = Y d/(π γ)` (where the scene gives no modulus), and
+/// the time step; `paper` is glass's 63 GPa. The biases
 /// they cost are measured in `docs/tradeoff-heap.md`.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     match preset {
@@ -281,11 +288,13 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
             ("numerics.integrator", Value::from("verlet")),
             ("numerics.dt_factor", Value::from(0.1)),
             ("material.kappa", Value::from(1e5)),
+            ("material.kappa_cohesion", Value::from(1e4)),
         ],
         Preset::Standard => vec![
             ("numerics.integrator", Value::from("verlet")),
             ("numerics.dt_factor", Value::from(0.1)),
             ("material.kappa", Value::from(1e6)),
+            ("material.kappa_cohesion", Value::from(1e5)),
         ],
         Preset::Paper => vec![
             ("numerics.integrator", Value::from("verlet")),

@@ -131,7 +131,8 @@ pub struct Numerics {
     pub integrator: Scheme,
     /// Time step as a fraction of the contact time of the stiffest pair.
     pub dt_factor: f64,
-    /// Impact speed at which that contact time is taken.
+    /// Impact speed at which that contact time is taken (or the protocol's
+    /// fastest impact, if higher: see [`Scene::impact_speed`]).
     pub reference_speed: f64,
     /// Explicit time step, s; overrides `dt_factor`.
     pub dt: Option<f64>,
@@ -476,7 +477,17 @@ impl Scene {
         self.numerics.dt_factor * self.contact_time()
     }
 
-    /// Shortest contact duration of this scene's grains at the reference
+    /// The speed at which the contact time is taken: the reference speed,
+    /// or the fastest impact the protocol makes happen if that is higher.
+    pub fn impact_speed(&self) -> f64 {
+        let v = self.numerics.reference_speed;
+        match self.protocol().ok().and_then(|p| p.impact_speed(self)) {
+            Some(fast) if fast > v => fast,
+            _ => v,
+        }
+    }
+
+    /// Shortest contact duration of this scene's grains at the impact
     /// speed, as the model defines it.
     pub fn contact_time(&self) -> f64 {
         match self.model() {
