@@ -18,6 +18,7 @@ mod bench_service;
 mod output;
 mod reproduce;
 mod service;
+mod side_views;
 mod tradeoff;
 
 use anyhow::Context;
@@ -210,6 +211,17 @@ fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     })
 }
 
+/// A metric with its unit: counts as integers, angles with the degree
+/// sign against the number, other units after a space.
+fn with_unit(v: f64, unit: &str) -> String {
+    match unit {
+        "grains" => format!("{v:.0} grains"),
+        "°" => format!("{v:.2}°"),
+        "" => format!("{v:.3}"),
+        u => format!("{v:.2} {u}"),
+    }
+}
+
 fn summary(r: &RunReport) -> String {
     let mut lines: Vec<(String, String)> = vec![
         (
@@ -229,7 +241,10 @@ fn summary(r: &RunReport) -> String {
         .unwrap_or_default();
     for m in declared {
         if let Some(v) = r.metric(m.name) {
-            lines.push((m.label.into(), format!("{v:.2}{}   ({})", m.unit, m.name)));
+            lines.push((
+                m.label.into(),
+                format!("{}   ({})", with_unit(v, m.unit), m.name),
+            ));
         }
     }
     for (k, q) in r.theory.iter().enumerate() {

@@ -1,6 +1,6 @@
 //! Files a run can write: an SVG of the pile with force chains (the paper's
 //! fig. 1a), a CSV of the kinetic-energy trace (fig. 1b) and a legacy VTK
-//! file for ParaView. In 3D the snapshot is the side view along y.
+//! file for ParaView. In 3D the snapshot is the two side views (`side_views`).
 
 use repose_physics::RunReport;
 use std::collections::HashMap;
@@ -15,6 +15,9 @@ fn at(v: &[f64], k: usize) -> f64 {
 /// touching centres with a width proportional to the normal force, the
 /// walls, and the measured surface.
 pub fn snapshot_svg(r: &RunReport) -> String {
+    if r.dimension == 3 {
+        return crate::side_views::svg(r);
+    }
     let Some(state) = &r.final_state else {
         return String::new();
     };
@@ -94,10 +97,15 @@ pub fn snapshot_svg(r: &RunReport) -> String {
     s
 }
 
-/// Kinetic energy per grain against iteration.
+/// Kinetic energy per grain against iteration, in the model's units.
 pub fn trace_csv(r: &RunReport) -> String {
-    let mut s =
-        String::from("iteration,time_s,kinetic_energy_per_grain_erg,max_speed_cm_s,phase\n");
+    let units = repose_physics::models::find(&r.model)
+        .map_or(repose_physics::engine::Units::CGS, |m| m.units());
+    let mut s = format!(
+        "iteration,time_s,kinetic_energy_per_grain_{},max_speed_{},phase\n",
+        units.energy,
+        units.speed.replace('/', "_")
+    );
     for p in &r.energy_trace {
         let _ = writeln!(
             s,

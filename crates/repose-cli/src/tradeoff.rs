@@ -1,13 +1,27 @@
-//! `repose tradeoff`: runs the speed/accuracy study in this process (see
-//! `repose_studies::tradeoff`) and writes `docs/speed-vs-accuracy.*`.
+//! `repose tradeoff`: runs a speed/accuracy study in this process (see
+//! `repose_studies::tradeoff`): of Lee & Herrmann's pile, written to
+//! `docs/speed-vs-accuracy.*`, or with `--study heap` of the 3D poured
+//! heap, written to `docs/tradeoff-heap.*`.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use repose_studies::tradeoff::{self, Config, Group, TradeoffError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Which scene the study runs.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Study {
+    /// Lee & Herrmann's tilted pile (θ_R and θ_T).
+    Pile,
+    /// Elekes & Parteli's poured heap (θ_r).
+    Heap,
+}
+
 #[derive(clap::Args)]
 pub struct TradeoffArgs {
+    /// The scene studied.
+    #[arg(long, value_enum, default_value = "pile")]
+    study: Study,
     /// Seeds (samples) per setting.
     #[arg(long, default_value_t = 30)]
     seeds: u32,
@@ -18,9 +32,10 @@ pub struct TradeoffArgs {
     #[arg(long)]
     threads: Option<usize>,
     /// The Markdown report to write; its SVG plots and the per-sample CSV
-    /// go beside it with the same stem.
-    #[arg(long, default_value = "docs/speed-vs-accuracy.md")]
-    out: PathBuf,
+    /// go beside it with the same stem (default: docs/speed-vs-accuracy.md,
+    /// or docs/tradeoff-heap.md for the heap).
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// Override a scene value in every setting (e.g. box.width=2 for a
     /// smaller, faster study).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -43,13 +58,19 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<ExitCode> {
         eprintln!("error: --seeds must be at least 1");
         return Ok(ExitCode::from(2));
     }
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from(match args.study {
+            Study::Pile => "docs/speed-vs-accuracy.md",
+            Study::Heap => "docs/tradeoff-heap.md",
+        })
+    });
     let config = Config {
         seeds: args.seeds,
         seed_base: args.seed_base,
         threads: args
             .threads
             .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        out: args.out.clone(),
+        out: out.clone(),
         set: args.set.clone(),
         only: args.only.clone(),
         resume: args.resume,
@@ -73,8 +94,19 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<ExitCode> {
             bar.inc(1);
         }
     };
-    let report = match tradeoff::run(&config, &tick) {
-        Ok(r) => r,
+    let written = match args.study {
+        Study::Pile => tradeoff::run(&config, &tick).and_then(|r| {
+            r.write()?;
+            Ok(r.summary())
+        }),
+        Study::Heap => tradeoff::heap::run(&config, &tick).and_then(|r| {
+            r.write()?;
+            Ok(r.summary())
+        }),
+    };
+    bar.finish_and_clear();
+    match written {
+        Ok(summary) => print!("{summary}"),
         Err(TradeoffError::Scene { setting, error }) => {
             eprintln!("error: setting `{setting}` is not a valid scene");
             for f in &error.errors {
@@ -83,10 +115,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
         Err(e) => return Err(e.into()),
-    };
-    bar.finish_and_clear();
-    report.write()?;
-    print!("{}", report.summary());
-    eprintln!("wrote {}", args.out.display());
+    }
+    eprintln!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

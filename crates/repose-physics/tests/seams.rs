@@ -102,6 +102,10 @@ where
             0.0
         }
     }
+
+    fn work(&self, _r_eff: f64, depth: f64) -> f64 {
+        self.force * (self.range + depth)
+    }
 }
 
 type Sticky = Pairwise<HertzDamped<true>, CundallStrack<true>, NoRolling, ConstantPull>;

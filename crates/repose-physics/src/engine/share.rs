@@ -25,6 +25,9 @@ use std::ops::Range;
 
 type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
 
+/// A share's crossing responses and its largest overlap.
+type Crossing<const D: usize> = (Vec<Option<Response<D>>>, (f64, usize));
+
 /// Shares of the grains per thread.
 const SHARES_PER_THREAD: usize = 4;
 
@@ -143,10 +146,7 @@ where
 }
 
 /// Cuts `v` into consecutive pieces of the given ranges (empty if `v` is).
-fn pieces<'v, T>(
-    mut v: &'v mut [T],
-    ranges: impl Iterator<Item = Range<usize>>,
-) -> Vec<&'v mut [T]> {
+fn pieces<T>(mut v: &mut [T], ranges: impl Iterator<Item = Range<usize>>) -> Vec<&mut [T]> {
     let mut out = Vec::new();
     let mut at = 0;
     for r in ranges {
@@ -177,7 +177,7 @@ where
         let blocks = || self.parts.iter().map(|s| s.pairs.clone());
         let mut hist = pieces(history, blocks());
         // 1. The crossing pairs.
-        let crossing: Vec<(Vec<Option<Response<D>>>, (f64, usize))> = hist
+        let crossing: Vec<Crossing<D>> = hist
             .par_iter_mut()
             .zip(self.parts)
             .map(|(h, share)| self.crossing(share, h))
@@ -208,11 +208,7 @@ where
     }
 
     /// Responses of a share's crossing pairs.
-    fn crossing(
-        &self,
-        share: &Share,
-        history: &mut [L::History],
-    ) -> (Vec<Option<Response<D>>>, (f64, usize)) {
+    fn crossing(&self, share: &Share, history: &mut [L::History]) -> Crossing<D> {
         let mut worst = (0.0, usize::MAX);
         let out = share
             .cross

@@ -122,11 +122,11 @@ impl Placer {
         for code in 0..27 {
             let mut c = k;
             let mut rest = code;
-            for a in 0..3 {
-                c[a] += (rest % 3) as i64 - 1;
+            for (slot, wrap) in c.iter_mut().zip(self.wrap) {
+                *slot += (rest % 3) as i64 - 1;
                 rest /= 3;
-                if self.wrap[a] > 0 {
-                    c[a] = c[a].rem_euclid(self.wrap[a]);
+                if wrap > 0 {
+                    *slot = slot.rem_euclid(wrap);
                 }
             }
             let Some(list) = self.cells.get(&c) else {

@@ -6,7 +6,10 @@
 //! protocol first releases the pile, so one run gives both θ_R and θ_T)
 //! over the same seeds. Piles are chaotic, so a change of numerics gives a
 //! different pile for the same seed: shifts are compared with their
-//! standard error (Welch), never read off single runs.
+//! standard error (Welch), never read off single runs. The same study of
+//! the 3D poured heap is in [`heap`].
+
+pub mod heap;
 
 use crate::chart::{Chart, Series, Style};
 use rayon::prelude::*;
@@ -110,15 +113,15 @@ const PAPER_METHODS: [(f64, f64); 3] = [(20.14, 2.15), (18.90, 1.49), (17.88, 1.
 /// The overlap guard for the softest grains of the sensitivity study.
 const SOFT_MAX_OVERLAP: f64 = 1.5;
 
-struct Case {
-    group: Group,
-    name: String,
-    what: String,
-    overrides: Vec<String>,
+pub(crate) struct Case {
+    pub group: Group,
+    pub name: String,
+    pub what: String,
+    pub overrides: Vec<String>,
 }
 
 impl Case {
-    fn new(group: Group, name: &str, what: &str, overrides: &[&str]) -> Self {
+    pub(crate) fn new(group: Group, name: &str, what: &str, overrides: &[&str]) -> Self {
         Case {
             group,
             name: name.into(),
@@ -322,13 +325,13 @@ fn summarise(samples: &[&Sample]) -> Summary {
 
 /// A shift from the reference with its standard error.
 #[derive(Clone, Copy)]
-struct Shift {
-    delta: f64,
-    se: f64,
+pub(crate) struct Shift {
+    pub delta: f64,
+    pub se: f64,
 }
 
 impl Shift {
-    fn between(a: Option<Stats>, reference: Option<Stats>) -> Option<Shift> {
+    pub(crate) fn between(a: Option<Stats>, reference: Option<Stats>) -> Option<Shift> {
         let (a, r) = (a?, reference?);
         Some(Shift {
             delta: a.mean - r.mean,
@@ -336,10 +339,10 @@ impl Shift {
         })
     }
     /// Beyond two standard errors counts as a real change of the answer.
-    fn significant(self) -> bool {
+    pub(crate) fn significant(self) -> bool {
         self.delta.abs() > 2.0 * self.se
     }
-    fn cell(s: Option<Shift>) -> String {
+    pub(crate) fn cell(s: Option<Shift>) -> String {
         match s {
             Some(s) => format!("{:+.2} ± {:.2}", s.delta, s.se),
             None => "—".into(),
@@ -347,7 +350,7 @@ impl Shift {
     }
 }
 
-fn stats_cell(s: Option<Stats>) -> String {
+pub(crate) fn stats_cell(s: Option<Stats>) -> String {
     match s {
         Some(s) => format!("{:.2} ± {:.2} (n={})", s.mean, s.sd, s.n),
         None => "—".into(),
@@ -355,7 +358,11 @@ fn stats_cell(s: Option<Stats>) -> String {
 }
 
 /// Builds and validates every scene before anything runs: `(case, scene)`.
-fn plan(config: &Config, all: &[Case]) -> Result<Vec<(usize, Scene)>, TradeoffError> {
+pub(crate) fn plan(
+    config: &Config,
+    all: &[Case],
+    base: &str,
+) -> Result<Vec<(usize, Scene)>, TradeoffError> {
     let mut jobs = Vec::new();
     for (k, case) in all.iter().enumerate() {
         let wanted = case.group == Group::Reference
@@ -368,7 +375,7 @@ fn plan(config: &Config, all: &[Case]) -> Result<Vec<(usize, Scene)>, TradeoffEr
             let mut o = config.set.clone();
             o.extend(case.overrides.iter().cloned());
             o.push(format!("seed={}", config.seed_base + s));
-            let scene = Scene::from_toml(BASE, &o).map_err(|error| TradeoffError::Scene {
+            let scene = Scene::from_toml(base, &o).map_err(|error| TradeoffError::Scene {
                 setting: case.name.clone(),
                 error,
             })?;
@@ -378,19 +385,68 @@ fn plan(config: &Config, all: &[Case]) -> Result<Vec<(usize, Scene)>, TradeoffEr
     Ok(jobs)
 }
 
-/// The samples kept from an earlier run's CSV for settings and seeds still planned.
-fn kept(csv: &Path, all: &[Case], jobs: &[(usize, Scene)]) -> Vec<Sample> {
+/// The samples kept from an earlier run's CSV for settings and seeds still
+/// planned (`key` names a sample's setting and seed).
+pub(crate) fn kept<S: serde::de::DeserializeOwned>(
+    csv: &Path,
+    names: &[String],
+    jobs: &[(usize, Scene)],
+    key: impl Fn(&S) -> (&str, u64),
+) -> Vec<S> {
     let Ok(mut reader) = csv::Reader::from_path(csv) else {
         return Vec::new();
     };
     reader
-        .deserialize::<Sample>()
+        .deserialize::<S>()
         .filter_map(Result::ok)
         .filter(|s| {
+            let (setting, seed) = key(s);
             jobs.iter()
-                .any(|(k, sc)| all[*k].name == s.setting && sc.seed == s.seed)
+                .any(|(k, sc)| names[*k] == setting && sc.seed == seed)
         })
         .collect()
+}
+
+/// Runs every job on `config.threads` threads, seed by seed and every
+/// setting in turn (anything else running on the machine then slows all
+/// settings alike, so the cost ratios stay fair); returns the samples and
+/// the wall time. `tick` as for [`run`].
+pub(crate) fn run_jobs<S: Send>(
+    config: &Config,
+    jobs: &mut [(usize, Scene)],
+    tick: &(dyn Fn(usize) + Sync),
+    one: impl Fn(usize, &Scene) -> S + Sync,
+) -> Result<(Vec<S>, f64), TradeoffError> {
+    jobs.sort_by_key(|(k, scene)| (scene.seed, *k));
+    tick(jobs.len());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(config.threads)
+        .build()
+        .map_err(|e| TradeoffError::Threads(e.to_string()))?;
+    let clock = std::time::Instant::now();
+    let samples = pool.install(|| {
+        jobs.par_iter()
+            .map(|(k, scene)| {
+                let s = one(*k, scene);
+                tick(0);
+                s
+            })
+            .collect()
+    });
+    Ok((samples, clock.elapsed().as_secs_f64()))
+}
+
+/// Writes the samples as CSV.
+pub(crate) fn write_csv<S: Serialize>(path: &Path, samples: &[S]) -> Result<(), TradeoffError> {
+    let err = |error: std::io::Error| TradeoffError::Write {
+        path: path.display().to_string(),
+        error,
+    };
+    let mut w = csv::Writer::from_path(path).map_err(|e| err(e.into()))?;
+    for s in samples {
+        w.serialize(s).map_err(|e| err(e.into()))?;
+    }
+    w.flush().map_err(err)
 }
 
 /// Runs the study (each setting over the same seeds, on `config.threads`
@@ -398,9 +454,15 @@ fn kept(csv: &Path, all: &[Case], jobs: &[(usize, Scene)]) -> Vec<Sample> {
 /// number of runs to make, then with 0 after each run.
 pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, TradeoffError> {
     let all = cases();
-    let mut jobs = plan(config, &all)?;
-    let kept = if config.resume {
-        kept(&config.out.with_extension("csv"), &all, &jobs)
+    let mut jobs = plan(config, &all, BASE)?;
+    let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
+    let kept: Vec<Sample> = if config.resume {
+        kept(
+            &config.out.with_extension("csv"),
+            &names,
+            &jobs,
+            |s: &Sample| (s.setting.as_str(), s.seed),
+        )
     } else {
         Vec::new()
     };
@@ -409,25 +471,8 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, Tra
             .iter()
             .any(|s| s.setting == all[*k].name && s.seed == sc.seed)
     });
-    // Seed by seed, every setting in turn: anything else running on the
-    // machine slows all settings alike, so the cost ratios stay fair.
-    jobs.sort_by_key(|(k, scene)| (scene.seed, *k));
-    tick(jobs.len());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(config.threads)
-        .build()
-        .map_err(|e| TradeoffError::Threads(e.to_string()))?;
-    let clock = std::time::Instant::now();
-    let mut samples: Vec<Sample> = pool.install(|| {
-        jobs.par_iter()
-            .map(|(k, scene)| {
-                let s = run_one(&all[*k], scene);
-                tick(0);
-                s
-            })
-            .collect()
-    });
-    let elapsed = clock.elapsed().as_secs_f64();
+    let (mut samples, elapsed) =
+        run_jobs(config, &mut jobs, tick, |k, scene| run_one(&all[k], scene))?;
     let fresh = samples.len();
     samples.extend(kept);
     let index = |s: &Sample| all.iter().position(|c| c.name == s.setting).unwrap_or(0);
@@ -877,7 +922,7 @@ fn verdict(dr: Option<Shift>, dt: Option<Shift>) -> String {
     }
 }
 
-fn cores() -> usize {
+pub(crate) fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
@@ -953,18 +998,7 @@ impl Report {
         write(out.to_path_buf(), self.markdown(&stem))?;
         write(beside("-repose.svg"), self.chart(false).svg())?;
         write(beside("-tilt.svg"), self.chart(true).svg())?;
-        let csv_path = beside(".csv");
-        let mut w = csv::Writer::from_path(&csv_path).map_err(|e| TradeoffError::Write {
-            path: csv_path.display().to_string(),
-            error: e.into(),
-        })?;
-        for smp in &self.samples {
-            w.serialize(smp).map_err(|e| TradeoffError::Write {
-                path: csv_path.display().to_string(),
-                error: e.into(),
-            })?;
-        }
-        w.flush().map_err(io(&csv_path))
+        write_csv(&beside(".csv"), &self.samples)
     }
 
     /// A table of every setting's cost and shifts, for the terminal.

@@ -1,0 +1,428 @@
+//! The speed/accuracy study of the 3D poured heap (`repose tradeoff
+//! --study heap`, written up in `docs/tradeoff-heap.md`): how far a
+//! softened Young's modulus — with and without rescaling the cohesion —,
+//! the time step, the heap's size and the settling criterion move θ_r,
+//! against what they cost.
+//!
+//! Glass at the paper's 63 GPa costs 10¹¹–10¹² particle-steps a heap, so
+//! the reference is the stiffest heap affordable many times over: 630 MPa,
+//! a hundredth of glass. Softer grains are compared with it; the `sticking`
+//! rescaling of the surface energy is taken relative to the reference's
+//! modulus, so that it maps each softened heap onto the reference's
+//! collisions.
+
+use super::{
+    cores, kept, plan, run_jobs, stats_cell, write_csv, Case, Config, Group, Shift, TradeoffError,
+};
+use crate::chart::{Chart, Series, Style};
+use repose_physics::measure::Stats;
+use repose_physics::{protocols, Preset, Quiet, Scene, ENGINE};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write;
+use std::path::Path;
+
+/// The heap every setting pours: 1 mm glass beads with glass's surface
+/// energy on Earth, 1500 grains on a 20 d plate; the reference modulus is
+/// also the one `sticking` rescales from.
+const BASE: &str = r#"
+protocol = "heap"
+[material]
+surface_energy = 0.05
+true_modulus = 6.3e8
+[heap]
+plate = 20
+max_grains = 1500
+"#;
+
+/// The reference: a hundredth of glass's modulus, Verlet at a tenth of the
+/// collision time.
+const REFERENCE: [&str; 3] = [
+    "material.youngs_modulus=6.3e8",
+    "numerics.integrator=verlet",
+    "numerics.dt_factor=0.1",
+];
+
+fn knob(name: &str, what: &str, settings: &[&str]) -> Case {
+    let keys: Vec<&str> = settings
+        .iter()
+        .filter_map(|s| s.split('=').next())
+        .collect();
+    let mut o: Vec<String> = REFERENCE
+        .iter()
+        .filter(|r| !keys.iter().any(|k| r.starts_with(&format!("{k}="))))
+        .map(|s| s.to_string())
+        .collect();
+    o.extend(settings.iter().map(|s| s.to_string()));
+    Case {
+        group: Group::Knobs,
+        name: name.into(),
+        what: what.into(),
+        overrides: o,
+    }
+}
+
+fn cases() -> Vec<Case> {
+    let mut v = vec![Case::new(
+        Group::Reference,
+        "reference",
+        "Y = 630 MPa, Verlet, dt = T_col/10",
+        &REFERENCE,
+    )];
+    let heap = protocols::find("heap");
+    for p in Preset::ALL {
+        let what = heap
+            .map(|h| p.describe(h))
+            .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
+            .unwrap_or_default();
+        v.push(Case {
+            group: Group::Presets,
+            name: p.name().into(),
+            what,
+            overrides: vec![format!("preset={}", p.name())],
+        });
+    }
+    v.extend([
+        knob(
+            "Y 63 MPa",
+            "Y = 63 MPa, γ unchanged",
+            &["material.youngs_modulus=6.3e7"],
+        ),
+        knob(
+            "Y 63 MPa, γ scaled",
+            "Y = 63 MPa, γ × (Y/630 MPa)^{2/5}",
+            &[
+                "material.youngs_modulus=6.3e7",
+                "material.cohesion_scaling=sticking",
+            ],
+        ),
+        knob(
+            "Y 6.3 MPa",
+            "Y = 6.3 MPa, γ unchanged",
+            &["material.youngs_modulus=6.3e6"],
+        ),
+        knob(
+            "Y 6.3 MPa, γ scaled",
+            "Y = 6.3 MPa, γ × (Y/630 MPa)^{2/5}",
+            &[
+                "material.youngs_modulus=6.3e6",
+                "material.cohesion_scaling=sticking",
+            ],
+        ),
+        knob("T_col/20", "dt = T_col/20", &["numerics.dt_factor=0.05"]),
+        knob("T_col/5", "dt = T_col/5", &["numerics.dt_factor=0.2"]),
+        knob(
+            "3000 grains",
+            "twice the grains poured",
+            &["heap.max_grains=3000"],
+        ),
+        knob(
+            "rest 1e-5",
+            "at rest below 10⁻⁵ m g d per grain (default 10⁻⁶)",
+            &["heap.rest_energy=1e-5"],
+        ),
+        knob(
+            "rest 1e-7",
+            "at rest below 10⁻⁷ m g d per grain",
+            &["heap.rest_energy=1e-7"],
+        ),
+    ]);
+    v
+}
+
+/// One sample's numbers: a row of the per-sample CSV.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Sample {
+    setting: String,
+    group: Group,
+    seed: u64,
+    status: String,
+    theta_r: Option<f64>,
+    theta_r_footprint: Option<f64>,
+    heap_grains: Option<f64>,
+    surface_roughness: Option<f64>,
+    youngs_modulus: f64,
+    wall_time_s: f64,
+    particle_steps: u64,
+    reason: String,
+}
+
+fn run_one(case: &Case, scene: &Scene) -> Sample {
+    let modulus = scene.sections["material"]["youngs_modulus"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    let (status, reason, metrics, wall, steps) = match repose_physics::run(scene, &mut Quiet) {
+        Ok(r) => (
+            r.outcome.status().to_string(),
+            r.outcome.reason().unwrap_or_default(),
+            r.metrics.clone(),
+            r.wall_time,
+            r.particle_steps,
+        ),
+        Err(e) => ("invalid".into(), e.to_string(), Default::default(), 0.0, 0),
+    };
+    let m = |name: &str| metrics.get(name).copied();
+    Sample {
+        setting: case.name.clone(),
+        group: case.group,
+        seed: scene.seed,
+        status,
+        theta_r: m("theta_r"),
+        theta_r_footprint: m("theta_r_footprint"),
+        heap_grains: m("heap_grains"),
+        surface_roughness: m("surface_roughness"),
+        youngs_modulus: modulus,
+        wall_time_s: wall,
+        particle_steps: steps,
+        reason,
+    }
+}
+
+/// What one setting measured.
+struct Summary {
+    theta: Option<Stats>,
+    footprint: Option<Stats>,
+    grains: Option<Stats>,
+    roughness: Option<Stats>,
+    modulus: f64,
+    wall_time: f64,
+    particle_steps: f64,
+    runs: usize,
+    failed: Vec<String>,
+}
+
+fn summarise(samples: &[&Sample]) -> Summary {
+    let of = |f: &dyn Fn(&Sample) -> Option<f64>| {
+        let v: Vec<f64> = samples.iter().filter_map(|s| f(s)).collect();
+        Stats::of(&v)
+    };
+    let n = samples.len().max(1) as f64;
+    Summary {
+        theta: of(&|s| s.theta_r),
+        footprint: of(&|s| s.theta_r_footprint),
+        grains: of(&|s| s.heap_grains),
+        roughness: of(&|s| s.surface_roughness),
+        modulus: samples.first().map_or(f64::NAN, |s| s.youngs_modulus),
+        wall_time: samples.iter().map(|s| s.wall_time_s).sum::<f64>() / n,
+        particle_steps: samples.iter().map(|s| s.particle_steps as f64).sum::<f64>() / n,
+        runs: samples.len(),
+        failed: samples
+            .iter()
+            .filter(|s| s.status != "completed")
+            .map(|s| format!("seed {}: {} ({})", s.seed, s.status, s.reason))
+            .collect(),
+    }
+}
+
+/// Runs the heap study and returns its report (`tick` as for [`super::run`]).
+pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<HeapReport, TradeoffError> {
+    let all = cases();
+    let mut jobs = plan(config, &all, BASE)?;
+    let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
+    let kept: Vec<Sample> = if config.resume {
+        kept(
+            &config.out.with_extension("csv"),
+            &names,
+            &jobs,
+            |s: &Sample| (s.setting.as_str(), s.seed),
+        )
+    } else {
+        Vec::new()
+    };
+    jobs.retain(|(k, sc)| {
+        !kept
+            .iter()
+            .any(|s| s.setting == all[*k].name && s.seed == sc.seed)
+    });
+    let (mut samples, elapsed) =
+        run_jobs(config, &mut jobs, tick, |k, scene| run_one(&all[k], scene))?;
+    let fresh = samples.len();
+    samples.extend(kept);
+    let index = |s: &Sample| all.iter().position(|c| c.name == s.setting).unwrap_or(0);
+    samples.sort_by_key(|s| (index(s), s.seed));
+    let summaries = all
+        .iter()
+        .map(|c| {
+            let mine: Vec<&Sample> = samples.iter().filter(|s| s.setting == c.name).collect();
+            (!mine.is_empty()).then(|| summarise(&mine))
+        })
+        .collect();
+    Ok(HeapReport {
+        cases: all,
+        summaries,
+        config: config.clone(),
+        elapsed,
+        fresh,
+        samples,
+    })
+}
+
+/// The heap study's results, ready to be written.
+pub struct HeapReport {
+    cases: Vec<Case>,
+    summaries: Vec<Option<Summary>>,
+    config: Config,
+    elapsed: f64,
+    fresh: usize,
+    samples: Vec<Sample>,
+}
+
+impl HeapReport {
+    fn reference(&self) -> Option<&Summary> {
+        self.summaries.first().and_then(Option::as_ref)
+    }
+
+    fn rows(&self) -> impl Iterator<Item = (&Case, &Summary)> {
+        self.cases
+            .iter()
+            .zip(&self.summaries)
+            .filter_map(|(c, s)| Some((c, s.as_ref()?)))
+    }
+
+    fn table(&self, groups: &[Group]) -> String {
+        let Some(r) = self.reference() else {
+            return String::new();
+        };
+        let mut s = String::from(
+            "| setting | what | Y (Pa) | wall time | particle-steps | θ_r (°) | Δθ_r | θ_r footprint (°) | grains in heap | roughness (d) | failed | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        );
+        for (c, m) in self
+            .rows()
+            .filter(|(c, _)| c.group == Group::Reference || groups.contains(&c.group))
+        {
+            let shift = Shift::between(m.theta, r.theta);
+            let verdict = match (c.group, shift) {
+                (Group::Reference, _) => "reference".to_string(),
+                (_, None) => "no result".to_string(),
+                (_, Some(sh)) if sh.significant() => "**shifts θ_r**".to_string(),
+                _ => "within error".to_string(),
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.2e} | {:.2}× ({:.1} s) | {:.2}× | {} | {} | {} | {} | {} | {}/{} | {verdict} |",
+                c.name,
+                c.what,
+                m.modulus,
+                m.wall_time / r.wall_time,
+                m.wall_time,
+                m.particle_steps / r.particle_steps,
+                stats_cell(m.theta),
+                Shift::cell(shift),
+                stats_cell(m.footprint),
+                stats_cell(m.grains),
+                stats_cell(m.roughness),
+                m.failed.len(),
+                m.runs,
+            );
+        }
+        s
+    }
+
+    fn chart(&self) -> Chart {
+        let mut chart = Chart::new(
+            "Shift of θ_r from the reference heap",
+            "wall time relative to the reference",
+            "Δθ_r (°)",
+        );
+        chart.log_x = true;
+        chart.y_rule = Some(0.0);
+        let Some(r) = self.reference() else {
+            return chart;
+        };
+        for (group, name) in [(Group::Presets, "presets"), (Group::Knobs, "knobs")] {
+            let mut series = Series::new(name, Style::Points);
+            for (c, m) in self.rows().filter(|(c, _)| c.group == group) {
+                if let Some(sh) = Shift::between(m.theta, r.theta) {
+                    series = series.labelled(m.wall_time / r.wall_time, sh.delta, sh.se, &c.name);
+                }
+            }
+            chart.series.push(series);
+        }
+        chart
+    }
+
+    fn markdown(&self, stem: &str) -> String {
+        let mut s = String::from("# Speed against accuracy: the poured heap\n\n");
+        let _ = writeln!(
+            s,
+            "Generated by `repose tradeoff --study heap --seeds {}` (engine {ENGINE}): {} runs on {} threads of a {}-core machine{}. \
+             Every setting pours 1 mm glass beads (γ = 0.05 J/m², Bond number 24) on Earth onto a 20 d plate until 1500 grains have fallen, over seeds {}–{}. \
+             Glass's 63 GPa costs 10¹¹–10¹² particle-steps a heap; the reference is a hundredth of it, 630 MPa, and the `sticking` rescaling of γ is taken from there. \
+             A shift is the difference of two means with its standard error; beyond two standard errors a setting **shifts θ_r**.\n",
+            self.config.seeds,
+            self.samples.len(),
+            self.config.threads,
+            cores(),
+            if self.fresh == self.samples.len() {
+                format!(" in {:.0} s", self.elapsed)
+            } else {
+                format!(" ({} of them now, in {:.0} s)", self.fresh, self.elapsed)
+            },
+            self.config.seed_base,
+            self.config.seed_base + self.config.seeds as u64 - 1,
+        );
+        let _ = writeln!(s, "## Presets\n\n{}", self.table(&[Group::Presets]));
+        let _ = writeln!(
+            s,
+            "## Each knob on its own\n\nEach row is the reference with one setting changed.\n\n{}",
+            self.table(&[Group::Knobs])
+        );
+        let _ = writeln!(s, "![shift of θ_r against cost]({stem}.svg)\n");
+        s.push_str(&self.failures());
+        let _ = writeln!(s, "Every sample is in [`{stem}.csv`]({stem}.csv).");
+        s
+    }
+
+    fn failures(&self) -> String {
+        let lines: Vec<String> = self
+            .rows()
+            .flat_map(|(c, m)| m.failed.iter().map(move |f| format!("- `{}` {f}", c.name)))
+            .collect();
+        if lines.is_empty() {
+            return "Every run completed.\n\n".into();
+        }
+        format!(
+            "## Runs without a result\n\nLeft out of the means above:\n\n{}\n\n",
+            lines.join("\n")
+        )
+    }
+
+    /// Writes the Markdown report, its chart and the per-sample CSV beside it.
+    pub fn write(&self) -> Result<(), TradeoffError> {
+        let out = &self.config.out;
+        let io = |path: &Path| {
+            let path = path.display().to_string();
+            move |error| TradeoffError::Write { path, error }
+        };
+        if let Some(d) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(d).map_err(io(d))?;
+        }
+        let stem = out
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("tradeoff-heap")
+            .to_string();
+        let svg = out.with_file_name(format!("{stem}.svg"));
+        std::fs::write(out, self.markdown(&stem)).map_err(io(out))?;
+        std::fs::write(&svg, self.chart().svg()).map_err(io(&svg))?;
+        write_csv(&out.with_extension("csv"), &self.samples)
+    }
+
+    /// Every setting's cost and shift, for the terminal.
+    pub fn summary(&self) -> String {
+        let mut s = String::new();
+        let Some(r) = self.reference() else {
+            return s;
+        };
+        for (c, m) in self.rows() {
+            let _ = writeln!(
+                s,
+                "{:<22} {:>7.2}× {:>24} {:>15}",
+                c.name,
+                m.wall_time / r.wall_time,
+                stats_cell(m.theta),
+                Shift::cell(Shift::between(m.theta, r.theta))
+            );
+        }
+        s
+    }
+}
