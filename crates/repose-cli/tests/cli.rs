@@ -310,8 +310,9 @@ fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
     std::fs::write(
         &scene,
         "protocol = \"free_run\"\ndimension = 3\nduration = 0.02\n\
-         [[particles]]\nposition = [0.0, 0.0, 0.5]\nradius = 0.1\n\
-         [[particles]]\nposition = [0.5, 0.2, 0.3]\nvelocity = [0.0, 0.0, -10.0]\nradius = 0.1\n\
+         [material]\nyoungs_modulus = 1e8\n\
+         [[particles]]\nposition = [0.0, 0.0, 0.05]\nradius = 0.0005\n\
+         [[particles]]\nposition = [0.01, 0.002, 0.003]\nvelocity = [0.5, 0.0, -1.0]\nradius = 0.0005\n\
          [[walls]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n",
     )
     .unwrap();
@@ -324,7 +325,11 @@ fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
     ]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
-    assert!(stdout.contains("free_run (3D"), "{stdout}");
+    // In 3D a free run takes Elekes & Parteli's rotating spheres, in SI units.
+    assert!(
+        stdout.contains("free_run (3D, model elekes_parteli"),
+        "{stdout}"
+    );
     let vtk = std::fs::read_to_string(vtk).unwrap();
     let points: Vec<Vec<f64>> = vtk
         .lines()
@@ -333,13 +338,29 @@ fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
         .take(2)
         .map(|l| l.split(' ').map(|x| x.parse().unwrap()).collect())
         .collect();
-    // The first sphere fell freely for 0.02 s: z = 0.5 − g t²/2.
+    // The first sphere fell freely for 0.02 s: z = 0.05 − g t²/2.
     assert_eq!(points[0].len(), 3);
-    let expected = 0.5 - 0.5 * 981.0 * 0.02 * 0.02;
-    assert!((points[0][2] - expected).abs() < 1e-3, "{points:?}");
-    assert!(points[1][1] == 0.2, "{points:?}");
+    let expected = 0.05 - 0.5 * 9.81 * 0.02 * 0.02;
+    assert!((points[0][2] - expected).abs() < 1e-6, "{points:?}");
+    assert!(points[1][1] == 0.002, "{points:?}");
+    // The second hit the plate sliding and left it spinning.
+    assert!(vtk.contains("VECTORS angular_velocity double"));
+    let spin: Vec<f64> = vtk
+        .lines()
+        .skip_while(|l| !l.starts_with("VECTORS angular_velocity"))
+        .nth(2)
+        .unwrap()
+        .split(' ')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert!(spin[1] > 0.0, "{spin:?}");
     // A 2D vector where a 3D one is needed is refused, naming the field.
-    let out = repose(&["run", scene.to_str().unwrap(), "--set", "gravity=[0, -981]"]);
+    let out = repose(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--set",
+        "gravity=[0, -9.81]",
+    ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(
         text(&out.stderr).contains("gravity"),

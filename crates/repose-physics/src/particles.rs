@@ -280,9 +280,13 @@ where
         self.radius.iter().sum::<f64>() / self.len() as f64
     }
 
-    /// The grains as documents.
+    /// The grains as documents, in the order of their ids (grains renumbered
+    /// in space keep their ids).
     pub fn grains(&self) -> Vec<Grain> {
-        (0..self.len())
+        let mut order: Vec<usize> = (0..self.len()).collect();
+        order.sort_by_key(|&i| self.id[i]);
+        order
+            .into_iter()
             .map(|i| Grain {
                 id: self.id[i],
                 position: self.pos[i].iter().copied().collect(),
