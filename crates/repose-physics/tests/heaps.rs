@@ -220,7 +220,7 @@ fn threads_share_the_pair_loop_without_changing_a_bit() {
     two.set_threads(2).unwrap();
     two.min_shared_pairs = 0;
     for s in [&mut one, &mut two] {
-        s.sort_every = 5;
+        s.sort_every = 500;
         s.run(8000).unwrap();
     }
     let touching = one.contact_forces().len();

@@ -162,8 +162,11 @@ where
     /// Largest overlap seen since the last reset, as a fraction of the smaller radius.
     pub max_overlap_seen: f64,
     primed: bool,
-    /// Renumber the grains in space every this many list builds (0: never).
+    /// Renumber the grains in space at the first list build this many
+    /// steps after the last renumbering (0: never).
     pub sort_every: u64,
+    /// The step of the last renumbering.
+    sorted_at: Option<u64>,
     /// Below this many listed pairs a step is too short to share among
     /// threads: waking them would cost more than it saves.
     pub min_shared_pairs: usize,
@@ -216,6 +219,7 @@ where
             max_overlap_seen: 0.0,
             primed: false,
             sort_every: 0,
+            sorted_at: None,
             min_shared_pairs: 8192,
             pool: None,
             shares: share::Shares::default(),
@@ -336,8 +340,12 @@ where
                 per.wrap(x);
             }
         }
-        if self.sort_every > 0 && self.neighbors.builds % self.sort_every == 0 {
+        let due = self
+            .sorted_at
+            .is_none_or(|at| self.iteration >= at + self.sort_every);
+        if self.sort_every > 0 && due {
             self.sort_spatially();
+            self.sorted_at = Some(self.iteration);
         }
         self.neighbors
             .rebuild(&self.particles, range, self.periodic.as_ref());

@@ -1,4 +1,4 @@
-//! Spatial ordering of the grains: every so many list builds the grains are
+//! Spatial ordering of the grains: every so many steps the grains are
 //! renumbered cell by cell (z slowest), so that grains near each other sit
 //! near each other in memory, the pair loop reads memory in order, and a
 //! split of the grains into index ranges is a split of space into slabs

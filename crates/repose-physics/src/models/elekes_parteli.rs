@@ -611,7 +611,7 @@ impl Model for ElekesParteli {
     /// Heaps and columns of thousands of spheres: ordering them in space
     /// keeps the pair loop in cache and lets threads share the work.
     fn sort_every(&self) -> u64 {
-        20
+        1000
     }
 
     fn options(&self, scene: &Scene) -> BTreeMap<String, String> {

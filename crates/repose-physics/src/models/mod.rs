@@ -47,8 +47,9 @@ pub trait Model: Sync {
     fn density(&self, scene: &Scene) -> f64;
     /// The physics options a run used, by name, for its report.
     fn options(&self, scene: &Scene) -> BTreeMap<String, String>;
-    /// Every how many neighbour-list builds the engine renumbers the grains
-    /// in space (0: never, which keeps the results of earlier versions).
+    /// Every how many steps (at the next neighbour-list build) the engine
+    /// renumbers the grains in space (0: never, which keeps the results of
+    /// earlier versions).
     fn sort_every(&self) -> u64 {
         0
     }
