@@ -209,6 +209,7 @@ fn merge(parts: &[PhaseThroughput], seconds: f64) -> PhaseThroughput {
         particle_steps: counters.particle_steps,
         seconds,
         particle_steps_per_second: counters.particle_steps as f64 / seconds,
+        touching_end: parts[parts.len() - 1].touching_end,
         counters,
     }
 }

@@ -27,6 +27,8 @@ pub struct PhaseThroughput {
     /// Wall-clock seconds of the timed steps.
     pub seconds: f64,
     pub particle_steps_per_second: f64,
+    /// Grain pairs touching at the end of the phase: the work per step.
+    pub touching_end: usize,
     pub counters: StageCounters,
 }
 
@@ -88,6 +90,7 @@ where
         particle_steps: c.particle_steps,
         seconds,
         particle_steps_per_second: c.particle_steps as f64 / seconds,
+        touching_end: sim.contact_forces().len(),
         counters: c,
     })
 }
