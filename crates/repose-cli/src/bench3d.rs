@@ -132,7 +132,9 @@ fn options(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         );
     }
     println!("(× base: cost per particle-step relative to the baseline; above 1 is slower;");
-    println!(" contacts: grain-grain contacts per grain in the settled heap, which each option shapes)");
+    println!(
+        " contacts: grain-grain contacts per grain in the settled heap, which each option shapes)"
+    );
     Ok(ExitCode::SUCCESS)
 }
 

@@ -53,7 +53,7 @@ pub fn parse(text: &str) -> Result<Doc, DocError> {
 pub fn parse_assignment(assignment: &str) -> Result<(String, Value), DocError> {
     let Some((key, raw)) = assignment.split_once('=') else {
         return Err(DocError::new(
-            assignment,
+            crate::scene::checks::shown_key(assignment),
             "an override is written key=value, e.g. contact.mu=0.3",
         ));
     };
@@ -71,7 +71,10 @@ pub fn parse_assignment(assignment: &str) -> Result<(String, Value), DocError> {
 
 fn check_path(key: &str) -> Result<(), DocError> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(DocError::new(key, "empty segment in the key"));
+        return Err(DocError::new(
+            crate::scene::checks::shown_key(key),
+            "empty segment in the key",
+        ));
     }
     Ok(())
 }

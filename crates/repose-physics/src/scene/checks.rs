@@ -65,7 +65,7 @@ pub struct Checks(Vec<FieldError>);
 impl Checks {
     pub fn fail(&mut self, field: &str, message: impl Into<String>) {
         self.0.push(FieldError {
-            field: field.to_string(),
+            field: shown_key(field),
             message: message.into(),
         });
     }
@@ -114,5 +114,14 @@ impl Checks {
         } else {
             Err(SceneError { errors: self.0 })
         }
+    }
+}
+
+/// A field's path as errors show it: an empty key is named as such.
+pub(crate) fn shown_key(field: &str) -> String {
+    if field.is_empty() {
+        "(empty key)".into()
+    } else {
+        field.to_string()
     }
 }

@@ -20,7 +20,7 @@
 //! wall friction, the number of grains, the time step); results store the
 //! resolved scene, so a sample can be rerun from its record alone.
 
-mod checks;
+pub(crate) mod checks;
 
 pub use checks::{Checks, FieldError, SceneError};
 
