@@ -248,6 +248,49 @@ async fn worker_processes_on_postgres_do_every_job_exactly_once() {
     db.drop_now(store).await;
 }
 
+/// `url` with its user replaced.
+fn as_user(url: &str, user: &str) -> String {
+    let (scheme, rest) = url.split_once("://").unwrap();
+    let host = rest.split_once('@').map_or(rest, |(_, h)| h);
+    format!("{scheme}://{user}@{host}")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_worker_with_the_least_privilege_role_finishes_a_sweep_on_postgres() {
+    let Some(db) = postgres().await else { return };
+    let store = Store::open(&db.url).await.unwrap();
+    let (created, jobs) = create(&store, &cheap_sweep(12), 3).await;
+    let roles = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/postgres/roles.sql"),
+    )
+    .unwrap();
+    sqlx::raw_sql(&roles).execute(store.pool()).await.unwrap();
+    let url = as_user(&db.url, "repose_worker");
+    run_workers_until_idle(&url, 2);
+    assert_every_job_done_once(&store, &created.id, &jobs).await;
+    // The role can do a worker's work and nothing else.
+    let worker = sqlx::AnyPool::connect(&url).await.unwrap();
+    for statement in [
+        "DELETE FROM results",
+        "UPDATE sweeps SET state = 'cancelled'",
+        "INSERT INTO sweeps (id) VALUES ('x')",
+        "DROP TABLE metric_values",
+        "CREATE TABLE intruder (x INTEGER)",
+    ] {
+        let err = sqlx::query(statement)
+            .execute(&worker)
+            .await
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("permission denied") || err.contains("must be owner"),
+            "{statement}: {err}"
+        );
+    }
+    worker.close().await;
+    db.drop_now(store).await;
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
     let url = format!("sqlite://{}", scratch("busy.db").display());

@@ -38,8 +38,23 @@ function metricLabel(name) {
   return name;
 }
 
-async function api(path, options = {}) {
-  const resp = await fetch(path, { headers: { "content-type": "application/json" }, ...options });
+// A server open beyond loopback guards changes (and, if private, reading)
+// with a bearer token: asked once on the first 401 and kept for the tab.
+function authHeaders() {
+  const token = sessionStorage.getItem("repose-token");
+  return token ? { authorization: `Bearer ${token}` } : {};
+}
+
+async function api(path, options = {}, asked = false) {
+  const headers = { "content-type": "application/json", ...authHeaders() };
+  const resp = await fetch(path, { ...options, headers });
+  if (resp.status === 401 && !asked) {
+    const token = window.prompt("This server needs its access token:");
+    if (token) {
+      sessionStorage.setItem("repose-token", token.trim());
+      return api(path, options, true);
+    }
+  }
   let body = null;
   try { body = await resp.json(); } catch (_) { body = null; }
   return { ok: resp.ok, status: resp.status, body };

@@ -19,7 +19,9 @@
 //! `{"error": "...", "errors": [{"field": "...", "message": "..."}]}`;
 //! an unknown sweep is 404. Only a failing database gives a 5xx.
 
+pub mod access;
 pub mod openapi;
+pub mod server;
 mod studies;
 mod sweeps;
 
@@ -32,6 +34,11 @@ use repose_physics::scene::{FieldError, SceneError};
 use repose_store::Store;
 use serde::Serialize;
 use std::path::PathBuf;
+use std::time::Duration;
+use tower_http::catch_panic::CatchPanicLayer;
+use tower_http::timeout::TimeoutLayer;
+
+pub use access::{Access, Token};
 
 /// Attempts a job gets before it is marked failed.
 pub const MAX_ATTEMPTS: i64 = 3;
@@ -41,17 +48,70 @@ pub struct AppState {
     pub store: Store,
     /// Where to read reports from first (see [`doc_file`]).
     pub docs: Option<PathBuf>,
+    pub access: Access,
 }
 
-/// The router of the whole service, serving the reports compiled into it.
+/// How a router serves: where its reports are, who may do what, how long
+/// a request may take.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Read reports from this folder when it holds a newer copy
+    /// (`repose serve` passes the working directory's `docs/`, which
+    /// `repose tradeoff` and `repose reproduce` regenerate).
+    pub docs: Option<PathBuf>,
+    pub access: Access,
+    /// Longest a request may take from its headers to its answer: a
+    /// client that sends its body slowly gets 408 after this.
+    pub request_timeout: Duration,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            docs: None,
+            access: Access::default(),
+            request_timeout: Duration::from_secs(60),
+        }
+    }
+}
+
+/// The router of the whole service, open to every request, serving the
+/// reports compiled into it.
 pub fn app(store: Store) -> Router {
-    app_with_docs(store, None)
+    app_with(store, Options::default())
 }
 
-/// The router, reading reports from `docs` when that folder holds a newer
-/// copy (`repose serve` passes the working directory's `docs/`, which
-/// `repose tradeoff` and `repose reproduce` regenerate).
-pub fn app_with_docs(store: Store, docs: Option<PathBuf>) -> Router {
+/// The router with its options. A handler that panics answers 500 instead
+/// of dropping the connection.
+pub fn app_with(store: Store, options: Options) -> Router {
+    let state = AppState {
+        store,
+        docs: options.docs,
+        access: options.access,
+    };
+    routes()
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            access::check,
+        ))
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            options.request_timeout,
+        ))
+        .layer(CatchPanicLayer::custom(panicked))
+        .with_state(state)
+}
+
+fn panicked(_: Box<dyn std::any::Any + Send + 'static>) -> Response {
+    tracing::error!("a handler panicked");
+    ApiError::new(
+        StatusCode::INTERNAL_SERVER_ERROR,
+        "the server failed on this request",
+    )
+    .into_response()
+}
+
+fn routes() -> Router<AppState> {
     Router::new()
         .route("/", get(index))
         .route("/static/{file}", get(static_file))
@@ -83,7 +143,6 @@ pub fn app_with_docs(store: Store, docs: Option<PathBuf>) -> Router {
         )
         .route("/api/samples/{hash}", get(sweeps::sample_report))
         .fallback(not_found)
-        .with_state(AppState { store, docs })
 }
 
 /// One field at fault.

@@ -359,3 +359,83 @@ async fn a_sweep_reports_what_its_samples_cost() {
         "{csv}"
     );
 }
+
+async fn call_as(
+    app: &axum::Router,
+    method: &str,
+    uri: &str,
+    token: Option<&str>,
+    body: Option<&str>,
+) -> (StatusCode, axum::http::HeaderMap) {
+    let mut req = Request::builder()
+        .method(method)
+        .uri(uri)
+        .header("content-type", "application/json");
+    if let Some(t) = token {
+        req = req.header("authorization", format!("Bearer {t}"));
+    }
+    let req = req
+        .body(
+            body.map(|b| Body::from(b.to_string()))
+                .unwrap_or_else(Body::empty),
+        )
+        .unwrap();
+    let resp = app.clone().oneshot(req).await.unwrap();
+    (resp.status(), resp.headers().clone())
+}
+
+#[tokio::test]
+async fn with_a_token_changes_need_it_and_a_private_server_guards_reading() {
+    let s = store().await;
+    let secret = "a-long-enough-secret-token";
+    let options = |private| repose_api::Options {
+        access: repose_api::Access {
+            token: Some(repose_api::Token::new(secret).unwrap()),
+            private,
+        },
+        ..Default::default()
+    };
+    let app = repose_api::app_with(s.clone(), options(false));
+    let spec = json!({"protocol": "fill_release", "samples": 1}).to_string();
+    for (token, want) in [
+        (None, StatusCode::UNAUTHORIZED),
+        (Some("a-long-enough-secret-toke"), StatusCode::UNAUTHORIZED),
+        (Some("wrong"), StatusCode::UNAUTHORIZED),
+        (Some(secret), StatusCode::CREATED),
+    ] {
+        let (status, headers) = call_as(&app, "POST", "/api/sweeps", token, Some(&spec)).await;
+        assert_eq!(status, want, "{token:?}");
+        if status == StatusCode::UNAUTHORIZED {
+            assert!(headers["www-authenticate"]
+                .to_str()
+                .unwrap()
+                .starts_with("Bearer"));
+        }
+    }
+    let (status, _) = call_as(&app, "POST", "/api/studies/lh93/sweeps/fig2a", None, None).await;
+    assert_eq!(status, StatusCode::UNAUTHORIZED);
+    // Reading stays open unless the server is private.
+    assert_eq!(
+        call_as(&app, "GET", "/api/sweeps", None, None).await.0,
+        StatusCode::OK
+    );
+    let private = repose_api::app_with(s.clone(), options(true));
+    for (uri, token, want) in [
+        ("/api/sweeps", None, StatusCode::UNAUTHORIZED),
+        ("/api/sweeps", Some(secret), StatusCode::OK),
+        (
+            "/api/studies/lh93/figures/3",
+            None,
+            StatusCode::UNAUTHORIZED,
+        ),
+        ("/api/health", None, StatusCode::OK),
+        ("/", None, StatusCode::OK),
+        ("/static/app.js", None, StatusCode::OK),
+    ] {
+        assert_eq!(
+            call_as(&private, "GET", uri, token, None).await.0,
+            want,
+            "{uri} {token:?}"
+        );
+    }
+}

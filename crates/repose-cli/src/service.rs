@@ -30,8 +30,75 @@ pub struct ServeArgs {
     /// copies compiled into the binary).
     #[arg(long, default_value = "docs")]
     docs: PathBuf,
+    /// File holding the access token that creating, queueing, cancelling
+    /// and retrying sweeps require (or set REPOSE_TOKEN). Required to
+    /// listen beyond loopback.
+    #[arg(long, env = "REPOSE_TOKEN_FILE")]
+    token_file: Option<PathBuf>,
+    /// Reading results needs the token too (the page asks for it).
+    #[arg(long)]
+    private: bool,
+    /// Listen beyond loopback without a token: anyone who reaches the port
+    /// can queue and cancel sweeps.
+    #[arg(long)]
+    insecure_open: bool,
+    /// Seconds a client has to send a request's headers.
+    #[arg(long, default_value_t = 10.0)]
+    header_timeout: f64,
+    /// Seconds a request may take from its headers to its answer.
+    #[arg(long, default_value_t = 60.0)]
+    request_timeout: f64,
     #[command(flatten)]
     lease: LeaseArgs,
+}
+
+impl ServeArgs {
+    /// The token from `--token-file` or `REPOSE_TOKEN`, checked.
+    fn token(&self) -> anyhow::Result<Option<repose_api::Token>> {
+        let secret = match (&self.token_file, std::env::var("REPOSE_TOKEN")) {
+            (Some(path), _) => std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read the token file {}", path.display()))?,
+            (None, Ok(secret)) => secret,
+            (None, Err(_)) => return Ok(None),
+        };
+        repose_api::Token::new(&secret)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("--token-file: {e}"))
+    }
+
+    /// Who may do what, refusing an open server beyond loopback.
+    fn access(&self, addr: std::net::SocketAddr) -> anyhow::Result<repose_api::Access> {
+        let token = self.token()?;
+        if token.is_none() && self.private {
+            bail!("--private needs an access token (--token-file or REPOSE_TOKEN)");
+        }
+        if token.is_none() && !addr.ip().is_loopback() && !self.insecure_open {
+            bail!(
+                "refusing to listen on {addr} without an access token: anyone who reaches it \
+                 could queue and cancel sweeps. Give --token-file FILE (or REPOSE_TOKEN), or \
+                 --insecure-open to accept that"
+            );
+        }
+        Ok(repose_api::Access {
+            token,
+            private: self.private,
+        })
+    }
+
+    fn options(&self, access: repose_api::Access) -> anyhow::Result<repose_api::Options> {
+        Ok(repose_api::Options {
+            docs: self.docs.is_dir().then(|| self.docs.clone()),
+            access,
+            request_timeout: seconds("--request-timeout", self.request_timeout)?,
+        })
+    }
+}
+
+fn seconds(flag: &str, value: f64) -> anyhow::Result<Duration> {
+    Duration::try_from_secs_f64(value)
+        .ok()
+        .filter(|d| !d.is_zero())
+        .with_context(|| format!("{flag} must be a positive number of seconds"))
 }
 
 #[derive(clap::Args)]
@@ -160,14 +227,19 @@ pub(crate) fn spawn_workers(
 
 pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     init_logging();
+    let limits = repose_api::server::Limits {
+        header_read: seconds("--header-timeout", args.header_timeout)?,
+        ..Default::default()
+    };
     runtime()?.block_on(async {
-        let store = Store::open(&args.database)
-            .await
-            .with_context(|| format!("cannot open the database {}", args.database))?;
         let listener = tokio::net::TcpListener::bind(&args.listen)
             .await
             .with_context(|| format!("cannot listen on {}", args.listen))?;
         let addr = listener.local_addr()?;
+        let options = args.options(args.access(addr)?)?;
+        let store = Store::open(&args.database)
+            .await
+            .with_context(|| format!("cannot open the database {}", args.database))?;
         let workers = args.workers.unwrap_or_else(|| {
             std::thread::available_parallelism()
                 .map(|n| n.get())
@@ -175,21 +247,21 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         });
         let shutdown = shutdown_on_signals();
         let handles = spawn_workers(&store, workers, &args.lease, false, &shutdown)?;
+        let guarded = if options.access.token.is_some() {
+            ", token required to change"
+        } else {
+            ""
+        };
         println!(
-            "repose: serving http://{addr}/ ({}, {workers} workers)",
+            "repose: serving http://{addr}/ ({}, {workers} workers{guarded})",
             args.database
         );
         let mut stop = shutdown.clone();
-        let docs = args.docs.is_dir().then(|| args.docs.clone());
-        axum::serve(listener, repose_api::app_with_docs(store, docs))
-            .with_graceful_shutdown(async move {
-                while !*stop.borrow() {
-                    if stop.changed().await.is_err() {
-                        break;
-                    }
-                }
-            })
-            .await?;
+        let app = repose_api::app_with(store, options);
+        repose_api::server::serve(listener, app, limits, async move {
+            let _ = stop.wait_for(|s| *s).await;
+        })
+        .await;
         for h in handles {
             let _ = h.await;
         }

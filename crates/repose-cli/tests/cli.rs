@@ -369,3 +369,61 @@ fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// `repose serve` beyond loopback: refused without a token, started with one.
+#[test]
+fn serve_refuses_a_public_address_without_a_token() {
+    let dir = std::env::temp_dir().join(format!("repose-cli-serve-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let db = format!("sqlite://{}", dir.join("serve.db").display());
+    let serve = |env: &[(&str, &str)], extra: &[&str]| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_repose"));
+        c.args([
+            "serve",
+            "--listen",
+            "0.0.0.0:0",
+            "--workers",
+            "0",
+            "--database",
+            &db,
+        ])
+        .args(extra)
+        .env_remove("REPOSE_TOKEN")
+        .env_remove("REPOSE_TOKEN_FILE")
+        .envs(env.iter().copied())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+        c
+    };
+    let out = serve(&[], &[]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("without an access token"),
+        "{}",
+        text(&out.stderr)
+    );
+    let short = dir.join("short-token");
+    std::fs::write(&short, "abc\n").unwrap();
+    let out = serve(&[], &["--token-file", short.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("--token-file"),
+        "{}",
+        text(&out.stderr)
+    );
+    // With a token it serves (and says the token guards changes, not the token).
+    let secret = "0123456789abcdef-secret";
+    let mut child = serve(&[("REPOSE_TOKEN", secret)], &[]).spawn().unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(child.stdout.take().unwrap()),
+        &mut line,
+    )
+    .unwrap();
+    let _ = child.kill();
+    let out = child.wait_with_output().unwrap();
+    assert!(line.contains("token required to change"), "{line}");
+    assert!(!line.contains(secret) && !text(&out.stderr).contains(secret));
+}

@@ -181,7 +181,8 @@ pub struct Progress {
 }
 
 impl Store {
-    /// Connects (creating an SQLite file on first start) and applies the migrations.
+    /// Connects (creating an SQLite file on first start) and applies the
+    /// migrations the database lacks.
     pub async fn open(url: &str) -> Result<Store> {
         sqlx::any::install_default_drivers();
         let backend = if url.starts_with("sqlite:") {
@@ -225,8 +226,24 @@ impl Store {
                     .await?
             }
         };
-        MIGRATOR.run(&pool).await?;
-        Ok(Store { pool, backend })
+        let store = Store { pool, backend };
+        if !store.schema_is_current().await {
+            MIGRATOR.run(&store.pool).await?;
+        }
+        Ok(store)
+    }
+
+    /// Whether every migration this build knows has been applied. A
+    /// current schema is not touched, so that workers can connect as a
+    /// role that may read and write rows but not change tables
+    /// (`deploy/postgres/roles.sql`).
+    async fn schema_is_current(&self) -> bool {
+        let latest = MIGRATOR.iter().map(|m| m.version).max().unwrap_or(0);
+        let applied: std::result::Result<Option<i64>, sqlx::Error> =
+            sqlx::query_scalar("SELECT MAX(version) FROM _sqlx_migrations WHERE success")
+                .fetch_one(&self.pool)
+                .await;
+        matches!(applied, Ok(Some(v)) if v >= latest)
     }
 
     pub fn backend(&self) -> Backend {
