@@ -459,3 +459,81 @@ async fn a_sample_that_fails_is_stored_with_its_reason_and_no_angle() {
         assert_eq!(got, expected, "{p}");
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retry_runs_failed_jobs_again_and_backup_copies_a_live_store() {
+    let db = format!("sqlite://{}", scratch("retry.db").display());
+    let store = Store::open(&db).await.unwrap();
+    let (created, jobs) = create(&store, &cheap_sweep(6), 3).await;
+    // Lost workers used up the attempts of three jobs.
+    for _ in 0..3 {
+        let job = store
+            .claim("lost", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert!(store
+            .fail(&job.job_id, "lost", "lease lost three times")
+            .await
+            .unwrap());
+    }
+    let token = "retry-test-token-0123456789";
+    let server = Server::start_with(&db, 2, &[("REPOSE_TOKEN", token)]);
+    let sweep_url = format!("{}/api/sweeps/{}", server.url, created.id);
+    wait_until(&sweep_url, "the other jobs", Duration::from_secs(60), |s| {
+        s["progress"]["done"] == 3 && s["progress"]["failed"] == 3
+    })
+    .await;
+    let retry = |with_token: bool| {
+        let mut c = Command::new(BIN);
+        c.args(["retry", &created.id, "--server", &server.url])
+            .env_remove("REPOSE_TOKEN")
+            .env_remove("REPOSE_TOKEN_FILE");
+        if with_token {
+            c.env("REPOSE_TOKEN", token);
+        }
+        c.output().unwrap()
+    };
+    let refused = retry(false);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("401"));
+    let out = retry(true);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("3 failed jobs queued again"), "{stdout}");
+    wait_until(
+        &sweep_url,
+        "the retried jobs",
+        Duration::from_secs(60),
+        finished,
+    )
+    .await;
+    assert_every_job_done_once(&store, &created.id, &jobs).await;
+    // A consistent copy of the store while the server has it open.
+    let copy = scratch("copy.db");
+    let backup = |to: &std::path::Path| {
+        Command::new(BIN)
+            .args(["backup", "--database", &db, to.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let out = backup(&copy);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("1 sweeps, 6 jobs, 6 results"), "{stdout}");
+    let copied = Store::open(&format!("sqlite://{}", copy.display()))
+        .await
+        .unwrap();
+    assert_every_job_done_once(&copied, &created.id, &jobs).await;
+    let again = backup(&copy);
+    assert_eq!(again.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("exists already"));
+}

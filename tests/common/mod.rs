@@ -29,6 +29,11 @@ pub struct Server {
 
 impl Server {
     pub fn start(database: &str, workers: usize) -> Server {
+        Server::start_with(database, workers, &[])
+    }
+
+    /// With extra environment variables (e.g. an access token).
+    pub fn start_with(database: &str, workers: usize, env: &[(&str, &str)]) -> Server {
         let mut child = Command::new(BIN)
             .args([
                 "serve",
@@ -39,6 +44,7 @@ impl Server {
                 "--workers",
                 &workers.to_string(),
             ])
+            .envs(env.iter().copied())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()

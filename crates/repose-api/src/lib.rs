@@ -133,6 +133,7 @@ fn routes() -> Router<AppState> {
         )
         .route("/api/sweeps/{id}", get(sweeps::show_sweep))
         .route("/api/sweeps/{id}/cancel", post(sweeps::cancel_sweep))
+        .route("/api/sweeps/{id}/retry", post(sweeps::retry_sweep))
         .route("/api/sweeps/{id}/samples", get(sweeps::samples))
         .route("/api/sweeps/{id}/points", get(sweeps::points))
         .route("/api/sweeps/{id}/series", get(sweeps::series))

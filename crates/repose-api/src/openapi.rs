@@ -25,6 +25,7 @@ use utoipa::OpenApi;
         crate::sweeps::list_sweeps,
         crate::sweeps::show_sweep,
         crate::sweeps::cancel_sweep,
+        crate::sweeps::retry_sweep,
         crate::sweeps::samples,
         crate::sweeps::points,
         crate::sweeps::series,

@@ -7,7 +7,7 @@ use axum::extract::{Path, Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use repose_store::{Aggregate, NewJob, Point, Sample, SeriesPoint, Store, SweepInfo};
+use repose_store::{Aggregate, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo};
 use repose_studies::SweepSpec;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -152,6 +152,38 @@ pub async fn cancel_sweep(
         return Err(ApiError::not_found("sweep"));
     }
     Ok(Json(require_sweep(&s.store, &id).await?))
+}
+
+/// What a retry queued again, and the sweep after it.
+#[derive(Debug, Serialize, utoipa::ToSchema)]
+pub struct Retried {
+    /// Failed jobs queued again with fresh attempts.
+    pub retried: u64,
+    pub sweep: SweepInfo,
+}
+
+/// Run a sweep's failed jobs again (those whose attempts were used up by
+/// lost workers); finished samples are not rerun.
+#[utoipa::path(post, path = "/api/sweeps/{id}/retry", tag = "sweeps", params(("id" = String, Path)),
+    responses((status = 200, body = Retried), (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+pub async fn retry_sweep(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Json<Retried>> {
+    let retried = match s.store.retry_failed(&id).await? {
+        Retry::Unknown => return Err(ApiError::not_found("sweep")),
+        Retry::Cancelled => {
+            return Err(ApiError::new(
+                StatusCode::CONFLICT,
+                "the sweep was cancelled; queue it again instead",
+            ))
+        }
+        Retry::Queued(n) => n,
+    };
+    Ok(Json(Retried {
+        retried,
+        sweep: require_sweep(&s.store, &id).await?,
+    }))
 }
 
 #[derive(Deserialize, utoipa::IntoParams)]

@@ -439,3 +439,63 @@ async fn with_a_token_changes_need_it_and_a_private_server_guards_reading() {
         );
     }
 }
+
+#[tokio::test]
+async fn failed_jobs_are_queued_again_and_finished_ones_are_kept() {
+    let s = store().await;
+    let spec = json!({"protocol": "fill_release", "samples": 3}).to_string();
+    let (_, created, _) = call(&s, "POST", "/api/sweeps", Some(&spec)).await;
+    let id = created["id"].as_str().unwrap().to_string();
+    // Nothing failed yet.
+    let (status, body, text) = call(&s, "POST", &format!("/api/sweeps/{id}/retry"), None).await;
+    assert_eq!(status, StatusCode::OK, "{text}");
+    assert_eq!(body["retried"], 0);
+    // One job finishes, two end failed (as when lost workers use up their attempts).
+    let lease = std::time::Duration::from_secs(60);
+    let first = s.claim("w", lease).await.unwrap().unwrap();
+    let record = repose_store::ResultRecord {
+        engine: "test".into(),
+        seed: 1,
+        outcome: "not_settled".into(),
+        reason: Some("not settled".into()),
+        metrics: Default::default(),
+        counts: Default::default(),
+        report: "{}".into(),
+    };
+    assert!(s
+        .complete(&first.job_id, "w", &first.sample_hash, &record)
+        .await
+        .unwrap());
+    for _ in 0..2 {
+        let job = s.claim("w", lease).await.unwrap().unwrap();
+        assert!(s
+            .fail(&job.job_id, "w", "lease lost three times")
+            .await
+            .unwrap());
+    }
+    let (status, body, text) = call(&s, "POST", &format!("/api/sweeps/{id}/retry"), None).await;
+    assert_eq!(status, StatusCode::OK, "{text}");
+    assert_eq!(body["retried"], 2);
+    let p = &body["sweep"]["progress"];
+    assert_eq!(
+        (
+            p["queued"].as_i64(),
+            p["done"].as_i64(),
+            p["failed"].as_i64()
+        ),
+        (Some(2), Some(1), Some(0))
+    );
+    // The retried jobs have fresh attempts; the finished one is not claimed again.
+    let again = s.claim("w", lease).await.unwrap().unwrap();
+    assert_ne!(again.job_id, first.job_id);
+    assert_eq!(again.attempts, 1);
+    // Unknown and cancelled sweeps.
+    assert_eq!(
+        call(&s, "POST", "/api/sweeps/nope/retry", None).await.0,
+        StatusCode::NOT_FOUND
+    );
+    call(&s, "POST", &format!("/api/sweeps/{id}/cancel"), None).await;
+    let (status, body, _) = call(&s, "POST", &format!("/api/sweeps/{id}/retry"), None).await;
+    assert_eq!(status, StatusCode::CONFLICT);
+    assert!(body["error"].as_str().unwrap().contains("cancelled"));
+}

@@ -21,7 +21,7 @@ const REQUESTS: usize = 10_000;
 const METHODS: [&str; 7] = ["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"];
 
 /// Every route, with `{..}` where a path parameter goes.
-const ROUTES: [&str; 21] = [
+const ROUTES: [&str; 22] = [
     "/",
     "/static/{file}",
     "/docs/{file}",
@@ -36,6 +36,7 @@ const ROUTES: [&str; 21] = [
     "/api/sweeps",
     "/api/sweeps/{id}",
     "/api/sweeps/{id}/cancel",
+    "/api/sweeps/{id}/retry",
     "/api/sweeps/{id}/samples",
     "/api/sweeps/{id}/points",
     "/api/sweeps/{id}/series",
@@ -131,6 +132,7 @@ impl Gen {
         };
         let own = if route == "/api/sweeps" && self.chance(80)
             || route.ends_with("/cancel")
+            || route.ends_with("/retry")
             || route.contains("/sweeps/{key}")
         {
             "POST"

@@ -12,6 +12,7 @@
 //! repose reproduce --preset quick
 //! ```
 
+mod admin;
 mod bench;
 mod bench3d;
 mod bench_service;
@@ -63,6 +64,10 @@ enum Command {
     Status(service::StatusArgs),
     /// Export a sweep's samples or points as CSV.
     Export(service::ExportArgs),
+    /// Run a sweep's failed jobs again (finished samples are kept).
+    Retry(admin::RetryArgs),
+    /// Copy a live SQLite store to a new file, consistently.
+    Backup(admin::BackupArgs),
 }
 
 #[derive(clap::Args)]
@@ -109,6 +114,8 @@ fn main() -> ExitCode {
         Command::Submit(args) => service::submit(args),
         Command::Status(args) => service::status(args),
         Command::Export(args) => service::export(args),
+        Command::Retry(args) => admin::retry(args),
+        Command::Backup(args) => admin::backup(args),
     };
     match result {
         Ok(code) => code,

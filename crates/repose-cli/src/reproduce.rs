@@ -190,7 +190,7 @@ async fn reproduce(
     server: &str,
     clock: Instant,
 ) -> anyhow::Result<ExitCode> {
-    let client = reqwest::Client::new();
+    let client = crate::admin::http()?;
     let queued = queue_all(&client, args, paper, server).await?;
     wait(&client, server, &queued, args.quiet).await?;
     let elapsed = clock.elapsed().as_secs_f64();

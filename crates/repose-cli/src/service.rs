@@ -13,7 +13,7 @@ use std::time::Duration;
 
 /// The embedded default database: a file beside where `repose serve` runs.
 pub const DEFAULT_DATABASE: &str = "sqlite://repose.db";
-const DEFAULT_SERVER: &str = "http://127.0.0.1:8080";
+pub(crate) const DEFAULT_SERVER: &str = "http://127.0.0.1:8080";
 
 #[derive(clap::Args)]
 pub struct ServeArgs {
@@ -351,7 +351,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     let spec = read_spec(&args.spec)?;
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
-        let client = reqwest::Client::new();
+        let client = crate::admin::http()?;
         let (status, body) = post_sweep(&client, &server, &spec).await?;
         if !status.is_success() {
             eprintln!("error: the server refused the sweep ({})", status.as_u16());
@@ -453,7 +453,7 @@ fn points_table(points: &Value, protocol: &str) -> String {
 pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
-        let client = reqwest::Client::new();
+        let client = crate::admin::http()?;
         match args.sweep {
             None => {
                 let list = get_json(&client, &format!("{server}/api/sweeps")).await?;

@@ -37,6 +37,7 @@ use std::collections::BTreeMap;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use query::{series, SeriesError, SeriesPoint};
+pub use queue::Retry;
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -48,6 +49,8 @@ pub enum StoreError {
     Url(String),
     #[error("stored document is unreadable: {0}")]
     Document(#[from] serde_json::Error),
+    #[error("{0}")]
+    Unsupported(&'static str),
 }
 
 pub type Result<T> = std::result::Result<T, StoreError>;
@@ -244,6 +247,31 @@ impl Store {
                 .fetch_one(&self.pool)
                 .await;
         matches!(applied, Ok(Some(v)) if v >= latest)
+    }
+
+    /// Writes a consistent copy of an SQLite store to the file `path`
+    /// (`VACUUM INTO`: one read transaction, so writers carry on and the
+    /// copy is of one moment) and returns the copy's numbers of sweeps,
+    /// jobs and results, read back from the copy.
+    pub async fn backup_into(&self, path: &str) -> Result<(i64, i64, i64)> {
+        if self.backend != Backend::Sqlite {
+            return Err(StoreError::Unsupported(
+                "a PostgreSQL store is backed up with pg_dump",
+            ));
+        }
+        sqlx::query("VACUUM INTO ?1")
+            .bind(path)
+            .execute(&self.pool)
+            .await?;
+        let copy = Store::open(&format!("sqlite://{path}")).await?;
+        let mut counts = [0i64; 3];
+        for (n, table) in counts.iter_mut().zip(["sweeps", "jobs", "results"]) {
+            *n = sqlx::query_scalar(&format!("SELECT COUNT(*) FROM {table}"))
+                .fetch_one(&copy.pool)
+                .await?;
+        }
+        copy.pool.close().await;
+        Ok((counts[0], counts[1], counts[2]))
     }
 
     pub fn backend(&self) -> Backend {

@@ -268,6 +268,31 @@ impl Store {
         Ok(r.rows_affected() == 1)
     }
 
+    /// Puts the failed jobs of a sweep (attempts used up by lost workers,
+    /// scenes that could not be run) back in the queue with fresh attempts;
+    /// finished jobs stay as they are. A cancelled sweep is not revived.
+    pub async fn retry_failed(&self, sweep_id: &str) -> Result<Retry> {
+        let state: Option<String> =
+            sqlx::query_scalar(&self.sql("SELECT state FROM sweeps WHERE id = $1"))
+                .bind(sweep_id)
+                .fetch_optional(&self.pool)
+                .await?;
+        match state.as_deref() {
+            None => return Ok(Retry::Unknown),
+            Some("cancelled") => return Ok(Retry::Cancelled),
+            Some(_) => {}
+        }
+        let r = sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'queued', attempts = 0, error = NULL, lease_owner = NULL, \
+             lease_expires = NULL, updated_at = $1 WHERE sweep_id = $2 AND state = 'failed'",
+        ))
+        .bind(now_ms())
+        .bind(sweep_id)
+        .execute(&self.pool)
+        .await?;
+        Ok(Retry::Queued(r.rows_affected()))
+    }
+
     /// Ends a running job without a result (its scene could not be run at all).
     pub async fn fail(&self, job_id: &str, owner: &str, reason: &str) -> Result<bool> {
         let r = sqlx::query(&self.sql(
@@ -282,4 +307,13 @@ impl Store {
         .await?;
         Ok(r.rows_affected() == 1)
     }
+}
+
+/// What [`Store::retry_failed`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Retry {
+    Unknown,
+    Cancelled,
+    /// This many failed jobs are queued again.
+    Queued(u64),
 }
