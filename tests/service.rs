@@ -324,6 +324,42 @@ async fn wait_running(store: &Store, sweep: &str) {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_worker_keeps_its_result_through_a_database_outage_and_writes_it_after() {
+    let Some(db) = postgres().await else { return };
+    let (store, sweep, jobs) = one_long_job(&db.url).await;
+    let w = worker(
+        &db.url,
+        &["--exit-when-idle", "--lease", "30", "--heartbeat", "1"],
+    );
+    wait_running(&store, &sweep).await;
+    // The database goes away: no new connections, every open one cut.
+    let admin = |sql: String| {
+        let pool = db.admin.clone();
+        async move { sqlx::query(&sql).execute(&pool).await.unwrap() }
+    };
+    admin(format!(
+        "ALTER DATABASE {} ALLOW_CONNECTIONS false",
+        db.name
+    ))
+    .await;
+    admin(format!(
+        "SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = '{}'",
+        db.name
+    ))
+    .await;
+    // Long enough for the run to end and its first writes to fail.
+    tokio::time::sleep(Duration::from_secs(6)).await;
+    admin(format!("ALTER DATABASE {} ALLOW_CONNECTIONS true", db.name)).await;
+    let out = w.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("could not store the result"), "{stderr}");
+    assert!(stderr.contains("1 results written"), "{stderr}");
+    assert_every_job_done_once(&store, &sweep, &jobs).await;
+    db.drop_now(store).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
     let Some(db) = postgres().await else { return };
     let url = db.url.clone();

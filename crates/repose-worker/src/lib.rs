@@ -173,18 +173,54 @@ async fn work(
         Ok(r) => r,
         Err(e) => return give_up(store, config, job, format!("unwritable report: {e}")).await,
     };
-    match store
-        .complete(&job.job_id, &config.owner, &job.sample_hash, &record)
-        .await
-    {
-        Ok(true) => Ending::Completed,
-        Ok(false) => {
-            tracing::warn!(job = %job.job_id, "lease lost before completion; result not written");
-            Ending::Lost
+    store_result(store, config, job, &record).await
+}
+
+/// Longest wait between two attempts to store a result.
+const MAX_BACKOFF: Duration = Duration::from_secs(5);
+
+/// Writes a result. While the database cannot be reached, tries again
+/// with growing waits for as long as the lease holds (renewing it when the
+/// database answers again), instead of throwing the run away.
+async fn store_result(
+    store: &Store,
+    config: &WorkerConfig,
+    job: &Claim,
+    record: &ResultRecord,
+) -> Ending {
+    // The lease was renewed at most one heartbeat ago.
+    let held_for = config.lease.saturating_sub(config.heartbeat);
+    let mut deadline = tokio::time::Instant::now() + held_for;
+    let mut wait = Duration::from_millis(100);
+    loop {
+        let error = match store
+            .complete(&job.job_id, &config.owner, &job.sample_hash, record)
+            .await
+        {
+            Ok(true) => return Ending::Completed,
+            Ok(false) => {
+                tracing::warn!(job = %job.job_id, "lease lost before completion; result not written");
+                return Ending::Lost;
+            }
+            Err(e) => e,
+        };
+        if tokio::time::Instant::now() + wait >= deadline {
+            tracing::warn!(job = %job.job_id, "could not store the result before the lease ran out: {error}");
+            return Ending::Lost;
         }
-        Err(e) => {
-            tracing::warn!(job = %job.job_id, "could not store the result: {e}");
-            Ending::Lost
+        tracing::warn!(job = %job.job_id, "could not store the result ({error}); retrying in {wait:?}");
+        tokio::time::sleep(wait).await;
+        wait = (wait * 2).min(MAX_BACKOFF);
+        match store
+            .heartbeat(&job.job_id, &config.owner, config.lease)
+            .await
+        {
+            Ok(Lease::Held) => deadline = tokio::time::Instant::now() + held_for,
+            Ok(_) => {
+                tracing::warn!(job = %job.job_id, "lease lost while the database was away");
+                return Ending::Lost;
+            }
+            Err(_) => {}
         }
     }
 }
