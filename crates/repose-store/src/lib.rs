@@ -26,6 +26,7 @@
 //! aggregates the metrics by name. It does not depend on the physics crate;
 //! what a protocol measures is whatever metrics its results carry.
 
+mod aggregates;
 pub mod export;
 mod query;
 mod queue;

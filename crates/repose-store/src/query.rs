@@ -177,47 +177,6 @@ impl Store {
             .collect()
     }
 
-    /// Per-point statistics of every metric, computed in the database from
-    /// counts, sums and sums of squares.
-    pub async fn points(&self, sweep_id: &str) -> Result<Vec<Point>> {
-        let rows = sqlx::query(&self.sql(
-            "SELECT j.point, MIN(j.seq) AS first, COUNT(*) AS samples, \
-             CAST(SUM(CASE WHEN r.outcome = 'completed' THEN 0 ELSE 1 END) AS BIGINT) AS failures \
-             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
-             WHERE j.sweep_id = $1 GROUP BY j.point ORDER BY first",
-        ))
-        .bind(sweep_id)
-        .fetch_all(&self.pool)
-        .await?;
-        let sums = sqlx::query(&self.sql(
-            "SELECT j.point, m.metric, COUNT(m.value) AS n, SUM(m.value) AS s, SUM(m.value * m.value) AS q \
-             FROM jobs j JOIN metric_values m ON m.sample_hash = j.sample_hash \
-             WHERE j.sweep_id = $1 GROUP BY j.point, m.metric",
-        ))
-        .bind(sweep_id)
-        .fetch_all(&self.pool)
-        .await?;
-        let mut metrics: HashMap<String, BTreeMap<String, Aggregate>> = HashMap::new();
-        for r in sums {
-            let agg = Aggregate::from_sums(r.get("n"), r.get("s"), r.get("q"));
-            metrics
-                .entry(r.get("point"))
-                .or_default()
-                .insert(r.get("metric"), agg);
-        }
-        rows.into_iter()
-            .map(|r| {
-                let text: String = r.get("point");
-                Ok(Point {
-                    point: parse_point(&text)?,
-                    samples: r.get("samples"),
-                    failures: r.get("failures"),
-                    metrics: metrics.remove(&text).unwrap_or_default(),
-                })
-            })
-            .collect()
-    }
-
     /// The full run report of one sample, as stored.
     pub async fn report(&self, sample_hash: &str) -> Result<Option<serde_json::Value>> {
         let text: Option<String> =

@@ -66,6 +66,7 @@ impl Store {
             .execute(&mut *tx)
             .await?;
         }
+        self.aggregate_sweep(&mut tx, &id).await?;
         tx.commit().await?;
         Ok(Created {
             id,
@@ -234,6 +235,9 @@ impl Store {
         .execute(&mut *tx)
         .await?;
         if inserted.rows_affected() == 1 {
+            let failed = result.outcome != "completed";
+            self.aggregate_result(&mut tx, sample_hash, failed, &result.metrics)
+                .await?;
             for (metric, value) in result.metrics.iter().filter(|(_, v)| v.is_finite()) {
                 sqlx::query(&self.sql(
                     "INSERT INTO metric_values (sample_hash, metric, value) VALUES ($1, $2, $3)",
