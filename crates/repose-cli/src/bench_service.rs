@@ -2,10 +2,11 @@
 //!
 //! 1. Queue overhead: claim + complete of no-op jobs per second, with
 //!    several claimers at once, on SQLite and on PostgreSQL.
-//! 2. Query latency: the points and figure queries over a sweep of
-//!    100 000 stored samples (the rows are bulk-loaded; only the queries
-//!    are timed).
-//! 3. End-to-end speed-up of a real sweep with one worker against two.
+//! 2. Query latency: the points and figure queries over sweeps of 10⁵ and
+//!    10⁶ stored samples (the rows are bulk-loaded and their running
+//!    aggregates built; only the queries are timed).
+//! 3. End-to-end speed-up of a real sweep of one-second jobs with one
+//!    worker against two.
 
 use anyhow::Context;
 use repose_physics::{run, Quiet, Scene};
@@ -30,11 +31,11 @@ pub struct BenchServiceArgs {
     /// Concurrent claimers.
     #[arg(long, default_value_t = 4)]
     claimers: usize,
-    /// Stored samples for the query measurement.
-    #[arg(long, default_value_t = 100_000)]
-    samples: usize,
-    /// Samples of the end-to-end sweep.
-    #[arg(long, default_value_t = 8)]
+    /// Stored samples of the sweeps the queries are timed on.
+    #[arg(long, num_args = 1.., default_values_t = [100_000, 1_000_000])]
+    samples: Vec<usize>,
+    /// Samples of the end-to-end sweep (each about a second of work).
+    #[arg(long, default_value_t = 12)]
     sweep_samples: u32,
 }
 
@@ -159,6 +160,7 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
         }
     }
     tx.commit().await?;
+    store.rebuild_aggregates(&id).await?;
     Ok(id)
 }
 
@@ -184,8 +186,16 @@ async fn measure(label: &str, store: &Store, args: &BenchServiceArgs) -> anyhow:
         "{label:<10} queue: {rate:8.0} claim+complete per second ({} no-op jobs, {} claimers)",
         args.jobs, args.claimers
     );
+    for &samples in &args.samples {
+        query_latency(label, store, samples).await?;
+    }
+    Ok(())
+}
+
+/// Times the points query and a figure series over a sweep of `samples`.
+async fn query_latency(label: &str, store: &Store, samples: usize) -> anyhow::Result<()> {
     let clock = Instant::now();
-    let sweep = load_samples(store, args.samples).await?;
+    let sweep = load_samples(store, samples).await?;
     let load = clock.elapsed().as_secs_f64();
     let (points_med, points_min) = time_ms(|| async { Ok(store.points(&sweep).await?) }).await?;
     let (fig_med, fig_min) = time_ms(|| async {
@@ -200,8 +210,7 @@ async fn measure(label: &str, store: &Store, args: &BenchServiceArgs) -> anyhow:
     .await?;
     let n = store.points(&sweep).await?.len();
     println!(
-        "{label:<10} query over {} samples ({n} points; loaded in {load:.1} s): points {points_med:.1} ms (min {points_min:.1}), figure series {fig_med:.1} ms (min {fig_min:.1})",
-        args.samples
+        "{label:<10} query over {samples} samples ({n} points; loaded in {load:.1} s): points {points_med:.2} ms (min {points_min:.2}), figure series {fig_med:.2} ms (min {fig_min:.2})"
     );
     Ok(())
 }
@@ -216,7 +225,7 @@ async fn sweep_time(workers: usize, samples: u32) -> anyhow::Result<f64> {
     let store = Store::open(&format!("sqlite://{}", dir.join("e2e.db").display())).await?;
     let spec: SweepSpec = serde_json::from_value(json!({
         "protocol": "fill_release",
-        "base": {"box": {"width": 2.0, "height": 2.0}},
+        "base": {"box": {"width": 3.0, "height": 3.0}},
         "samples": samples,
         "fidelity": "standard"
     }))?;
@@ -270,7 +279,7 @@ pub fn run_bench(args: BenchServiceArgs) -> anyhow::Result<ExitCode> {
         let one = sweep_time(1, args.sweep_samples).await?;
         let two = sweep_time(2, args.sweep_samples).await?;
         println!(
-            "sweep      {} fill-and-release samples (2 × 2 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
+            "sweep      {} fill-and-release samples (3 × 3 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
             args.sweep_samples,
             one / two
         );

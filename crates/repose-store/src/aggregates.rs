@@ -40,6 +40,21 @@ impl Store {
         Ok(())
     }
 
+    /// Builds a sweep's running aggregates afresh from its samples (after
+    /// rows were loaded around the queue, e.g. by a benchmark or a restore).
+    pub async fn rebuild_aggregates(&self, sweep_id: &str) -> Result<()> {
+        let mut tx = self.pool.begin().await?;
+        for table in ["point_metrics", "point_stats"] {
+            sqlx::query(&self.sql(&format!("DELETE FROM {table} WHERE sweep_id = $1")))
+                .bind(sweep_id)
+                .execute(&mut *tx)
+                .await?;
+        }
+        self.aggregate_sweep(&mut tx, sweep_id).await?;
+        tx.commit().await?;
+        Ok(())
+    }
+
     /// Adds a newly stored result to the points of every job that has its sample.
     pub(crate) async fn aggregate_result(
         &self,

@@ -49,8 +49,9 @@ impl Store {
                 "queued"
             };
             sqlx::query(&self.sql(
-                "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, created_at, updated_at) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, 0, $10, $11, $11)",
+                "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, \
+                 created_at, updated_at, priority, sweep_created) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, 0, $10, $11, $11, $12, $11)",
             ))
             .bind(uuid::Uuid::new_v4().to_string())
             .bind(&id)
@@ -63,6 +64,7 @@ impl Store {
             .bind(state)
             .bind(max_attempts)
             .bind(now)
+            .bind(sweep.priority)
             .execute(&mut *tx)
             .await?;
         }
@@ -94,15 +96,15 @@ impl Store {
         let now = now_ms();
         let expires = now + lease.as_millis() as i64;
         let mut conn = self.pool.acquire().await?;
+        // One seek in `jobs_next`: queued jobs belong to active sweeps only.
         let pick = match self.backend {
             Backend::Sqlite => {
-                "SELECT j.id FROM jobs j JOIN sweeps s ON s.id = j.sweep_id \
-                 WHERE j.state = 'queued' AND s.state = 'active' ORDER BY s.priority DESC, s.created_at, j.seq LIMIT 1"
+                "SELECT id FROM jobs WHERE state = 'queued' \
+                 ORDER BY priority DESC, sweep_created, sweep_id, seq LIMIT 1"
             }
             Backend::Postgres => {
-                "SELECT j.id FROM jobs j JOIN sweeps s ON s.id = j.sweep_id \
-                 WHERE j.state = 'queued' AND s.state = 'active' ORDER BY s.priority DESC, s.created_at, j.seq LIMIT 1 \
-                 FOR UPDATE OF j SKIP LOCKED"
+                "SELECT id FROM jobs WHERE state = 'queued' \
+                 ORDER BY priority DESC, sweep_created, sweep_id, seq LIMIT 1 FOR UPDATE SKIP LOCKED"
             }
         };
         let claim_sql = self.sql(&format!(

@@ -1,0 +1,65 @@
+//! Jobs are claimed by sweep priority, then oldest sweep first, then in
+//! job order; a cancelled sweep's jobs are never claimed.
+
+use repose_store::{NewJob, NewSweep, Store};
+use serde_json::json;
+use std::time::Duration;
+
+fn sweep(name: &str, priority: i64) -> NewSweep {
+    NewSweep {
+        name: name.into(),
+        protocol: "free_run".into(),
+        spec: json!({}),
+        priority,
+        study: None,
+    }
+}
+
+fn jobs(tag: &str, n: u64) -> Vec<NewJob> {
+    (0..n)
+        .map(|k| NewJob {
+            point: serde_json::Map::new(),
+            sample: k as u32,
+            seed: k,
+            sample_hash: format!("{tag}-{k}"),
+            scene: json!({}),
+        })
+        .collect()
+}
+
+#[tokio::test]
+async fn claims_follow_priority_then_age_then_job_order() {
+    let dir = std::env::temp_dir().join(format!("repose-order-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let _ = std::fs::remove_file(dir.join("order.db"));
+    let store = Store::open(&format!("sqlite://{}", dir.join("order.db").display()))
+        .await
+        .unwrap();
+    store
+        .create_sweep(&sweep("old", 0), &jobs("old", 3), 3)
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(5)).await;
+    store
+        .create_sweep(&sweep("urgent", 5), &jobs("urgent", 2), 3)
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(5)).await;
+    store
+        .create_sweep(&sweep("young", 0), &jobs("young", 2), 3)
+        .await
+        .unwrap();
+    let cancelled = store
+        .create_sweep(&sweep("gone", 9), &jobs("gone", 2), 3)
+        .await
+        .unwrap();
+    assert!(store.cancel_sweep(&cancelled.id).await.unwrap());
+    let mut order = Vec::new();
+    while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
+        order.push(c.sample_hash);
+    }
+    assert_eq!(
+        order,
+        ["urgent-0", "urgent-1", "old-0", "old-1", "old-2", "young-0", "young-1"]
+    );
+}
