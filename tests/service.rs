@@ -12,16 +12,7 @@ use std::time::{Duration, Instant};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{create, finished, get, scratch, signal, wait_until, Server, BIN};
-
-fn worker(database: &str, extra: &[&str]) -> Child {
-    Command::new(BIN)
-        .args(["worker", "--database", database])
-        .args(extra)
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("repose worker starts")
-}
+use common::{create, finished, get, scratch, signal, wait_until, worker, Server, BIN};
 
 /// Starts `count` worker processes that leave when the queue is empty,
 /// waits for all of them, and returns what each wrote to stderr.

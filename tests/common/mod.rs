@@ -63,6 +63,14 @@ impl Server {
     }
 }
 
+impl Server {
+    /// Kills the server outright (SIGKILL), as a crash would.
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 impl Drop for Server {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -135,6 +143,16 @@ pub async fn create(store: &Store, spec: &SweepSpec, max_attempts: i64) -> (Crea
         .await
         .unwrap();
     (created, jobs)
+}
+
+/// A `repose worker` process on `database`, its stderr piped.
+pub fn worker(database: &str, extra: &[&str]) -> Child {
+    Command::new(BIN)
+        .args(["worker", "--database", database])
+        .args(extra)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("repose worker starts")
 }
 
 /// Sends a signal (`TERM`, `KILL`) to a child process.
