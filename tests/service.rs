@@ -6,7 +6,7 @@
 use repose_store::Store;
 use repose_studies::{JobSpec, SweepSpec};
 use serde_json::{json, Value};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
 #[path = "common/mod.rs"]

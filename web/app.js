@@ -531,7 +531,8 @@ async function helpView() {
       h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), "."),
     h("p", {}, "Reports: ",
       h("a", { href: "#/doc/reproduction" }, "the reproduction of the paper's figures"), " · ",
-      h("a", { href: "#/doc/speed-vs-accuracy" }, "speed against accuracy"), "."));
+      h("a", { href: "#/doc/speed-vs-accuracy" }, "speed against accuracy"), " · ",
+      h("a", { href: "#/doc/tradeoff-heap" }, "speed against accuracy of the 3D heap"), "."));
   setView(h("h1", {}, "Help"), intro, h("p", { class: "muted" }, "Loading the speed/accuracy report…"));
   const doc = await fetchDoc("speed-vs-accuracy");
   setView(h("h1", {}, "Help"), intro,

@@ -54,6 +54,17 @@ alive_pid() { # pidfile program
   echo "$pid"
 }
 
+# wait up to 10 s for a daemon that forked into the background to write its
+# pid file
+wait_alive() { # pidfile program
+  local i
+  for ((i = 0; i < 100; i++)); do
+    alive_pid "$1" "$2" >/dev/null && return 0
+    sleep 0.1
+  done
+  return 1
+}
+
 show_logs() {
   local f
   for f in "$LOG_DIR/slurmctld.log" "$LOG_DIR/slurmd.log"; do
@@ -73,13 +84,19 @@ install_packages() {
   command -v apt-get >/dev/null || die "apt-get not found: this script is for Debian/Ubuntu"
   say "installing ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
+  local log
+  log=$(mktemp)
   # The package lists may be absent or stale (fresh containers): update once
   # and retry if the first attempt fails.
-  if ! apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null; then
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null ||
+  if ! apt-get install -y -qq --no-install-recommends "${missing[@]}" >"$log" 2>&1; then
+    if ! { apt-get update -qq &&
+      apt-get install -y -qq --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+      tail -n 20 "$log" >&2
+      rm -f "$log"
       die "apt-get install ${missing[*]} failed"
+    fi
   fi
+  rm -f "$log"
 }
 
 start_munge() {
@@ -223,14 +240,16 @@ do_start() {
     say "slurmctld already running"
   else
     say "starting slurmctld"
-    /usr/sbin/slurmctld || { show_logs; die "slurmctld did not start"; }
+    /usr/sbin/slurmctld && wait_alive "$CTLD_PID" slurmctld ||
+      { show_logs; die "slurmctld did not start"; }
   fi
   if alive_pid "$SLURMD_PID" slurmd >/dev/null; then
     say "slurmd already running"
   else
     say "starting slurmd"
     since=$(date +%s)
-    /usr/sbin/slurmd || { show_logs; die "slurmd did not start"; }
+    /usr/sbin/slurmd && wait_alive "$SLURMD_PID" slurmd ||
+      { show_logs; die "slurmd did not start"; }
   fi
 
   local state=""

@@ -290,6 +290,9 @@ async fn reports_are_served_by_name_and_nothing_else_is() {
     let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;
     assert_eq!(status, StatusCode::OK);
     assert!(text.starts_with("# Speed against accuracy"), "{text}");
+    let (status, _, text) = call(&s, "GET", "/docs/tradeoff-heap.md", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(text.contains("poured heap"), "{text}");
     let (status, _, text) = call(&s, "GET", "/docs/reproduction-fig3.svg", None).await;
     assert_eq!(status, StatusCode::OK);
     assert!(text.starts_with("<svg"));

@@ -157,7 +157,7 @@ impl Gen {
             }
         }
         if self.chance(5) {
-            out.push_str(&["/", "//", "/extra", "/.."][self.below(4)]);
+            out.push_str(["/", "//", "/extra", "/.."][self.below(4)]);
         }
         if self.chance(40) {
             let pairs: Vec<String> = (0..1 + self.below(4))

@@ -378,10 +378,13 @@ impl HeapReport {
             self.samples.len(),
             self.config.threads,
             cores(),
-            if self.fresh == self.samples.len() {
-                format!(" in {:.0} s", self.elapsed)
-            } else {
-                format!(" ({} of them now, in {:.0} s)", self.fresh, self.elapsed)
+            {
+                let busy: f64 = self.samples.iter().map(|s| s.wall_time_s).sum();
+                match self.fresh {
+                    0 => format!(", {busy:.0} s of run time in all (read back from the per-sample CSV)"),
+                    n if n == self.samples.len() => format!(" in {:.0} s ({busy:.0} s of run time)", self.elapsed),
+                    n => format!(" ({n} of them now, in {:.0} s; {busy:.0} s of run time in all)", self.elapsed),
+                }
             },
             self.config.seed_base,
             self.config.seed_base + self.config.seeds as u64 - 1,
