@@ -95,7 +95,11 @@ async fn a_sweep_completes_through_a_slurm_job_array() {
     assert_eq!((tasks, written), (2, 20));
     let store = Store::open(&db).await.unwrap();
     let p = store.progress(&id).await.unwrap();
-    assert_eq!((p.done, p.queued, p.running, p.failed), (20, 0, 0, 0), "{p:?}");
+    assert_eq!(
+        (p.done, p.queued, p.running, p.failed),
+        (20, 0, 0, 0),
+        "{p:?}"
+    );
     println!("SLURM: 2 array tasks wrote {written} results of sweep {id}");
     store.pool().close().await;
     drop(api);
