@@ -237,6 +237,8 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         "base": {"box": {"width": 2.0, "height": 2.0}},
         "axes": {"contact.mu": [0.1, 0.3]},
         "samples": 2,
+        "target_sem": 100.0,
+        "max_samples": 4,
         "fidelity": "quick"
     });
     let flux = json!({
@@ -311,6 +313,13 @@ fn the_list_and_the_sweep(tab: &mut Page, id: &str) {
     );
     assert_eq!(count(tab, "#points tbody tr"), 2);
     assert_eq!(count(tab, "#samples tbody tr"), 4);
+    // Each point's standard error against the sweep's target.
+    let targets = tab.evaluate(
+        "[...document.querySelectorAll('#points td.target')].map(td => td.innerText).join('|')",
+    );
+    let targets = targets.as_str().unwrap_or_default();
+    assert_eq!(targets.matches("/ 100").count(), 2, "{targets}");
+    assert_eq!(targets.matches("reached").count(), 2, "{targets}");
     tab.screenshot("sweep.png");
 }
 

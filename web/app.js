@@ -311,14 +311,39 @@ function plotControls(axes, metrics, chosen, redraw, figures, id) {
     ...figures.map(f => h("a", { class: "button secondary", href: `#/sweep/${id}/figure/${f.paper}/${f.figure}` }, `${f.paper} figure ${f.figure}`)));
 }
 
-function pointsTable(points, metrics) {
+// The metric a sweep's target_sem is for: the one it names, else the
+// protocol's headline metric.
+function targetOf(spec, metrics) {
+  if (!spec || !spec.target_sem) return null;
+  return { value: spec.target_sem, metric: spec.target_metric || (metrics[0] && metrics[0].name) };
+}
+
+// A point's standard error against the sweep's target, as a cell.
+function targetCell(q, target) {
+  const a = q.metrics[target.metric] || {};
+  const met = a.sem !== null && a.sem !== undefined && a.sem <= target.value;
+  return h("td", { class: "num target" }, `${fmt(a.sem)} / ${fmt(target.value)} `,
+    h("span", { class: `tag ${met ? "completed" : "running"}` }, met ? "reached" : "sampling"));
+}
+
+function pointsTable(points, metrics, spec) {
   const cols = metrics.filter(m => points.some(q => q.metrics[m.name] && q.metrics[m.name].n > 0));
+  const target = targetOf(spec, metrics);
   return h("div", { class: "panel" }, h("table", { id: "points" },
     h("thead", {}, h("tr", {}, h("th", {}, "Point"), h("th", { class: "num" }, "n"), h("th", { class: "num" }, "no result"),
-      ...cols.map(m => h("th", { class: "num" }, `${metricLabel(m.name)} mean ± sd (sem)`)))),
+      ...cols.map(m => h("th", { class: "num" }, `${metricLabel(m.name)} mean ± sd (sem)`)),
+      target ? h("th", { class: "num" }, `sem of ${metricLabel(target.metric)} / target`) : "")),
     h("tbody", {}, ...points.map(q => h("tr", {}, h("td", {}, JSON.stringify(q.point)), h("td", { class: "num" }, String(q.samples)),
       h("td", { class: "num" }, String(q.failures)),
-      ...cols.map(m => { const a = q.metrics[m.name] || {}; return h("td", { class: "num" }, a.n ? `${fmt(a.mean)} ± ${fmt(a.sd)} (${fmt(a.sem)})` : "–"); }))))));
+      ...cols.map(m => { const a = q.metrics[m.name] || {}; return h("td", { class: "num" }, a.n ? `${fmt(a.mean)} ± ${fmt(a.sd)} (${fmt(a.sem)})` : "–"); }),
+      target ? targetCell(q, target) : "")))));
+}
+
+// "3 samples a point", or the range a target_sem sweep may use.
+function samplesText(spec) {
+  const least = spec.samples || 1;
+  if (!spec.target_sem) return `${least} samples a point`;
+  return `${least}–${spec.max_samples || 10 * least} samples a point until the sem reaches ${fmt(spec.target_sem)}`;
 }
 
 function samplesTable(samples, metrics) {
@@ -364,14 +389,14 @@ async function sweepView(id) {
       h("h1", {}, sweep.name),
       h("div", { class: "panel" },
         h("p", {}, stateTag(sweep), " ", sweep.protocol, " · ", axesSummary(sweep.spec),
-          " · ", `${sweep.spec.samples || 1} samples a point · fidelity ${sweep.spec.fidelity || "standard"}`,
+          " · ", `${samplesText(sweep.spec)} · fidelity ${sweep.spec.fidelity || "standard"}`,
           sweep.study ? ` · queued for ${sweep.study}` : ""),
         h("div", { class: "controls" }, progressBar(sweep.progress), h("span", {}, counts(sweep.progress)), h("span", {}, `ETA ${eta(sweep.eta_seconds)}`),
           sweep.state === "active" && unfinished(sweep.progress) ? h("button", { class: "danger", onclick: () => cancel(id, refresh) }, "Cancel sweep") : "")));
     const points = p.body.points, samples = smp.body.samples;
     draw(sweep, points, samples);
     const metrics = metricsOf(sweep.protocol);
-    pointsBox.replaceChildren(h("h2", {}, "Points"), pointsTable(points, metrics));
+    pointsBox.replaceChildren(h("h2", {}, "Points"), pointsTable(points, metrics, sweep.spec));
     samplesBox.replaceChildren(h("h2", {}, `Samples (${samples.length})`), samplesTable(samples, metrics));
     if (!unfinished(sweep.progress)) clearInterval(timer);
   };

@@ -41,7 +41,7 @@ use tower_http::timeout::TimeoutLayer;
 pub use access::{Access, Token};
 
 /// Attempts a job gets before it is marked failed.
-pub const MAX_ATTEMPTS: i64 = 3;
+pub const MAX_ATTEMPTS: i64 = repose_store::DEFAULT_MAX_ATTEMPTS;
 
 #[derive(Clone)]
 pub struct AppState {

@@ -40,6 +40,43 @@ impl Store {
         Ok(())
     }
 
+    /// Rebuilds one point's aggregates from its samples.
+    pub(crate) async fn aggregate_point(
+        &self,
+        conn: &mut sqlx::AnyConnection,
+        sweep_id: &str,
+        point: &str,
+    ) -> Result<()> {
+        sqlx::query(&self.sql(&format!(
+            "UPDATE point_stats SET \
+             samples = (SELECT COUNT(*) FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+                        WHERE j.sweep_id = $1 AND j.point = $2), \
+             failures = (SELECT COALESCE({FAILED}, 0) FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+                        WHERE j.sweep_id = $1 AND j.point = $2) \
+             WHERE sweep_id = $1 AND point = $2"
+        )))
+        .bind(sweep_id)
+        .bind(point)
+        .execute(&mut *conn)
+        .await?;
+        sqlx::query(&self.sql("DELETE FROM point_metrics WHERE sweep_id = $1 AND point = $2"))
+            .bind(sweep_id)
+            .bind(point)
+            .execute(&mut *conn)
+            .await?;
+        sqlx::query(&self.sql(
+            "INSERT INTO point_metrics (sweep_id, point, metric, n, s, q) \
+             SELECT j.sweep_id, j.point, m.metric, COUNT(m.value), SUM(m.value), SUM(m.value * m.value) \
+             FROM jobs j JOIN metric_values m ON m.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = $1 AND j.point = $2 GROUP BY j.sweep_id, j.point, m.metric",
+        ))
+        .bind(sweep_id)
+        .bind(point)
+        .execute(&mut *conn)
+        .await?;
+        Ok(())
+    }
+
     /// Builds a sweep's running aggregates afresh from its samples (after
     /// rows were loaded around the queue, e.g. by a benchmark or a restore).
     pub async fn rebuild_aggregates(&self, sweep_id: &str) -> Result<()> {

@@ -30,6 +30,7 @@ mod aggregates;
 pub mod export;
 mod query;
 mod queue;
+mod topup;
 
 use serde::{Deserialize, Serialize};
 use sqlx::any::AnyPoolOptions;
@@ -39,6 +40,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use query::{series, SeriesError, SeriesPoint};
 pub use queue::Retry;
+pub use topup::PointJobs;
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -55,6 +57,9 @@ pub enum StoreError {
 }
 
 pub type Result<T> = std::result::Result<T, StoreError>;
+
+/// Attempts a job gets before it is marked failed.
+pub const DEFAULT_MAX_ATTEMPTS: i64 = 3;
 
 /// Which database is behind the pool.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -35,38 +35,16 @@ impl Store {
         .bind(sweep.study.as_deref())
         .execute(&mut *tx)
         .await?;
+        let order = JobOrder {
+            sweep_id: &id,
+            priority: sweep.priority,
+            created: now,
+            max_attempts,
+            now,
+        };
         let mut reused = 0;
         for (seq, job) in jobs.iter().enumerate() {
-            let known: Option<AnyRow> =
-                sqlx::query(&self.sql("SELECT 1 FROM results WHERE sample_hash = $1"))
-                    .bind(&job.sample_hash)
-                    .fetch_optional(&mut *tx)
-                    .await?;
-            let state = if known.is_some() {
-                reused += 1;
-                "done"
-            } else {
-                "queued"
-            };
-            sqlx::query(&self.sql(
-                "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, \
-                 created_at, updated_at, priority, sweep_created) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, 0, $10, $11, $11, $12, $11)",
-            ))
-            .bind(uuid::Uuid::new_v4().to_string())
-            .bind(&id)
-            .bind(seq as i64)
-            .bind(serde_json::Value::Object(job.point.clone()).to_string())
-            .bind(job.sample as i64)
-            .bind(job.seed as i64)
-            .bind(&job.sample_hash)
-            .bind(job.scene.to_string())
-            .bind(state)
-            .bind(max_attempts)
-            .bind(now)
-            .bind(sweep.priority)
-            .execute(&mut *tx)
-            .await?;
+            reused += usize::from(self.insert_job(&mut tx, &order, seq as i64, job).await?);
         }
         self.aggregate_sweep(&mut tx, &id).await?;
         tx.commit().await?;
@@ -75,6 +53,44 @@ impl Store {
             jobs: jobs.len(),
             reused,
         })
+    }
+
+    /// Inserts one job of a sweep; a job whose sample already has a result
+    /// is created done (reused). Returns whether it was reused.
+    pub(crate) async fn insert_job(
+        &self,
+        conn: &mut sqlx::AnyConnection,
+        order: &JobOrder<'_>,
+        seq: i64,
+        job: &NewJob,
+    ) -> Result<bool> {
+        let known: Option<AnyRow> =
+            sqlx::query(&self.sql("SELECT 1 FROM results WHERE sample_hash = $1"))
+                .bind(&job.sample_hash)
+                .fetch_optional(&mut *conn)
+                .await?;
+        let state = if known.is_some() { "done" } else { "queued" };
+        sqlx::query(&self.sql(
+            "INSERT INTO jobs (id, sweep_id, seq, point, sample, seed, sample_hash, scene, state, attempts, max_attempts, \
+             created_at, updated_at, priority, sweep_created) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, 0, $10, $11, $11, $12, $13)",
+        ))
+        .bind(uuid::Uuid::new_v4().to_string())
+        .bind(order.sweep_id)
+        .bind(seq)
+        .bind(serde_json::Value::Object(job.point.clone()).to_string())
+        .bind(job.sample as i64)
+        .bind(job.seed as i64)
+        .bind(&job.sample_hash)
+        .bind(job.scene.to_string())
+        .bind(state)
+        .bind(order.max_attempts)
+        .bind(order.now)
+        .bind(order.priority)
+        .bind(order.created)
+        .execute(&mut *conn)
+        .await?;
+        Ok(known.is_some())
     }
 
     /// Returns expired leases to the queue (or fails jobs out of attempts).
@@ -322,4 +338,14 @@ pub enum Retry {
     Cancelled,
     /// This many failed jobs are queued again.
     Queued(u64),
+}
+
+/// What every job of a sweep carries for the claim order.
+pub(crate) struct JobOrder<'a> {
+    pub sweep_id: &'a str,
+    pub priority: i64,
+    /// The sweep's creation time.
+    pub created: i64,
+    pub max_attempts: i64,
+    pub now: i64,
 }

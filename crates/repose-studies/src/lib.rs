@@ -23,6 +23,7 @@ pub mod figure;
 pub mod papers;
 pub mod reproduction;
 pub mod spec;
+pub mod topup;
 pub mod tradeoff;
 
 pub use figure::FigureData;

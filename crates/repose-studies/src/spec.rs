@@ -39,9 +39,20 @@ pub struct SweepSpec {
     #[serde(default)]
     #[schema(value_type = HashMap<String, Vec<Object>>)]
     pub axes: BTreeMap<String, Vec<Value>>,
-    /// Samples (seeds) per point.
+    /// Samples (seeds) per point; with `target_sem`, the least a point gets.
     #[serde(default = "one")]
     pub samples: u32,
+    /// Add samples to each point until the standard error of
+    /// `target_metric` there is at most this (in the metric's unit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_sem: Option<f64>,
+    /// The metric `target_sem` is for (default: the protocol's headline metric).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_metric: Option<String>,
+    /// The most samples a point gets while it chases `target_sem`
+    /// (default: ten times `samples`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_samples: Option<u32>,
     #[serde(default)]
     #[schema(value_type = String, example = "standard")]
     pub fidelity: Fidelity,
@@ -105,6 +116,56 @@ impl SweepSpec {
 
     /// Validates the spec and builds every job, in (point, sample) order.
     pub fn expand(&self) -> Result<Vec<JobSpec>, SceneError> {
+        self.check()?;
+        let mut jobs = Vec::with_capacity(self.job_count());
+        for (point, doc) in self.point_docs()? {
+            for sample in 0..self.samples {
+                jobs.push(job(&point, &doc, self.seed_base, sample)?);
+            }
+        }
+        Ok(jobs)
+    }
+
+    /// Jobs for samples `from..from + count` of one point of the sweep
+    /// (the samples `target_sem` adds).
+    pub fn more_samples(
+        &self,
+        point: &Map<String, Value>,
+        from: u32,
+        count: u32,
+    ) -> Result<Vec<JobSpec>, SceneError> {
+        let (_, doc) = self
+            .point_docs()?
+            .into_iter()
+            .find(|(p, _)| p == point)
+            .ok_or_else(|| field_error("axes", "no such point in the sweep"))?;
+        (from..from.saturating_add(count))
+            .map(|sample| job(point, &doc, self.seed_base, sample))
+            .collect()
+    }
+
+    /// The largest number of samples a point may get, and whether it
+    /// chases a standard error at all.
+    pub fn max_samples_per_point(&self) -> u32 {
+        match self.target_sem {
+            Some(_) => self
+                .max_samples
+                .unwrap_or_else(|| self.samples.saturating_mul(10)),
+            None => self.samples,
+        }
+    }
+
+    /// The metric `target_sem` is for.
+    pub fn target_metric(&self) -> Option<String> {
+        self.target_sem?;
+        self.target_metric.clone().or_else(|| {
+            protocols::find(&self.protocol)
+                .and_then(|p| p.metrics().first().map(|m| m.name.to_string()))
+        })
+    }
+
+    /// Checks everything but the scenes themselves.
+    fn check(&self) -> Result<(), SceneError> {
         if protocols::find(&self.protocol).is_none() {
             return Err(field_error(
                 "protocol",
@@ -137,16 +198,20 @@ impl SweepSpec {
                 return Err(field_error(format!("axes.{key}"), "cannot be swept"));
             }
         }
-        let total = self.job_count();
+        self.check_target()?;
+        let points = self.job_count() / self.samples as usize;
+        let total = points.saturating_mul(self.max_samples_per_point() as usize);
         if total > MAX_JOBS {
             return Err(field_error(
                 "axes",
-                format!("the sweep expands into {total} jobs, more than the limit of {MAX_JOBS}"),
+                format!(
+                    "the sweep may expand into {total} jobs, more than the limit of {MAX_JOBS}"
+                ),
             ));
         }
         if self
             .seed_base
-            .checked_add(self.samples as u64)
+            .checked_add(self.max_samples_per_point() as u64)
             .is_none_or(|s| s > i64::MAX as u64)
         {
             return Err(field_error(
@@ -154,13 +219,58 @@ impl SweepSpec {
                 "seed_base + samples must stay below 2^63",
             ));
         }
+        Ok(())
+    }
 
+    /// `target_sem`, `target_metric` and `max_samples` agree.
+    fn check_target(&self) -> Result<(), SceneError> {
+        let Some(target) = self.target_sem else {
+            if self.target_metric.is_some() || self.max_samples.is_some() {
+                return Err(field_error(
+                    "target_sem",
+                    "target_metric and max_samples go with target_sem",
+                ));
+            }
+            return Ok(());
+        };
+        if !(target.is_finite() && target > 0.0) {
+            return Err(field_error("target_sem", "must be a positive number"));
+        }
+        let metric = self.target_metric().unwrap_or_default();
+        let known = protocols::find(&self.protocol)
+            .map(|p| {
+                p.metrics()
+                    .iter()
+                    .map(|m| m.name.to_string())
+                    .collect::<Vec<_>>()
+            })
+            .unwrap_or_default();
+        if !known.contains(&metric) {
+            return Err(field_error(
+                "target_metric",
+                format!(
+                    "`{metric}` is not a metric of {}: expected one of {}",
+                    self.protocol,
+                    known.join(", ")
+                ),
+            ));
+        }
+        if self.max_samples_per_point() < self.samples.max(2) {
+            return Err(field_error(
+                "max_samples",
+                "must be at least samples, and at least 2 for a standard error",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Every point of the sweep with its scene document (without seed).
+    fn point_docs(&self) -> Result<Vec<(Map<String, Value>, Map<String, Value>)>, SceneError> {
         let mut base = self.base.clone();
         base.insert("protocol".into(), Value::from(self.protocol.clone()));
         base.insert("preset".into(), Value::from(self.fidelity.name()));
-
         let keys: Vec<&String> = self.axes.keys().collect();
-        let mut jobs = Vec::with_capacity(total);
+        let mut out = Vec::new();
         let mut index = vec![0usize; keys.len()];
         loop {
             let mut point = Map::new();
@@ -171,27 +281,12 @@ impl SweepSpec {
                     .map_err(|e| field_error(format!("axes.{key}"), e.message))?;
                 point.insert((*key).clone(), value);
             }
-            for sample in 0..self.samples {
-                let seed = self.seed_base + sample as u64;
-                let mut scene_doc = doc.clone();
-                scene_doc.insert("seed".into(), Value::from(seed));
-                let scene =
-                    Scene::from_json(Value::Object(scene_doc)).map_err(|e| locate(e, &point))?;
-                let scene = scene.resolved();
-                let sample_hash = sample_hash(&scene);
-                jobs.push(JobSpec {
-                    point: point.clone(),
-                    sample,
-                    seed,
-                    scene,
-                    sample_hash,
-                });
-            }
+            out.push((point, doc));
             // Next point: odometer over the axes, last key fastest.
             let mut k = keys.len();
             loop {
                 if k == 0 {
-                    return Ok(jobs);
+                    return Ok(out);
                 }
                 k -= 1;
                 index[k] += 1;
@@ -202,6 +297,28 @@ impl SweepSpec {
             }
         }
     }
+}
+
+/// Sample `sample` of a point: its resolved, validated scene and hash.
+fn job(
+    point: &Map<String, Value>,
+    doc: &Map<String, Value>,
+    seed_base: u64,
+    sample: u32,
+) -> Result<JobSpec, SceneError> {
+    let seed = seed_base + sample as u64;
+    let mut scene_doc = doc.clone();
+    scene_doc.insert("seed".into(), Value::from(seed));
+    let scene = Scene::from_json(Value::Object(scene_doc)).map_err(|e| locate(e, point))?;
+    let scene = scene.resolved();
+    let sample_hash = sample_hash(&scene);
+    Ok(JobSpec {
+        point: point.clone(),
+        sample,
+        seed,
+        scene,
+        sample_hash,
+    })
 }
 
 impl SweepSpec {
