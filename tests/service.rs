@@ -257,7 +257,12 @@ async fn a_worker_with_the_least_privilege_role_finishes_a_sweep_on_postgres() {
     .unwrap();
     sqlx::raw_sql(&roles).execute(store.pool()).await.unwrap();
     let url = as_user(&db.url, "repose_worker");
-    run_workers_until_idle(&url, 2);
+    for stderr in run_workers_until_idle(&url, 2) {
+        assert!(
+            !stderr.contains("could not") && !stderr.contains("failed"),
+            "{stderr}"
+        );
+    }
     assert_every_job_done_once(&store, &created.id, &jobs).await;
     // The role can do a worker's work and nothing else.
     let worker = sqlx::AnyPool::connect(&url).await.unwrap();

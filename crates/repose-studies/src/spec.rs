@@ -265,7 +265,7 @@ impl SweepSpec {
     }
 
     /// Every point of the sweep with its scene document (without seed).
-    fn point_docs(&self) -> Result<Vec<(Map<String, Value>, Map<String, Value>)>, SceneError> {
+    fn point_docs(&self) -> Result<Vec<PointDoc>, SceneError> {
         let mut base = self.base.clone();
         base.insert("protocol".into(), Value::from(self.protocol.clone()));
         base.insert("preset".into(), Value::from(self.fidelity.name()));
@@ -298,6 +298,9 @@ impl SweepSpec {
         }
     }
 }
+
+/// A point's axis values and its scene document (without the seed).
+type PointDoc = (Map<String, Value>, Map<String, Value>);
 
 /// Sample `sample` of a point: its resolved, validated scene and hash.
 fn job(

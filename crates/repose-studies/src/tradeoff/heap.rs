@@ -12,7 +12,7 @@
 //! collisions.
 
 use super::{
-    cores, kept, plan, run_jobs, stats_cell, write_csv, Case, Config, Group, Shift, TradeoffError,
+    cores, gather, stats_cell, write_csv, Case, Config, Gathered, Group, Shift, TradeoffError,
 };
 use crate::chart::{Chart, Series, Style};
 use repose_physics::measure::Stats;
@@ -242,29 +242,18 @@ fn summarise(samples: &[&Sample]) -> Summary {
 /// Runs the heap study and returns its report (`tick` as for [`super::run`]).
 pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<HeapReport, TradeoffError> {
     let all = cases();
-    let mut jobs = plan(config, &all, BASE)?;
-    let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
-    let kept: Vec<Sample> = if config.resume {
-        kept(
-            &config.out.with_extension("csv"),
-            &names,
-            &jobs,
-            |s: &Sample| (s.setting.as_str(), s.seed),
-        )
-    } else {
-        Vec::new()
-    };
-    jobs.retain(|(k, sc)| {
-        !kept
-            .iter()
-            .any(|s| s.setting == all[*k].name && s.seed == sc.seed)
-    });
-    let (mut samples, elapsed) =
-        run_jobs(config, &mut jobs, tick, |k, scene| run_one(&all[k], scene))?;
-    let fresh = samples.len();
-    samples.extend(kept);
-    let index = |s: &Sample| all.iter().position(|c| c.name == s.setting).unwrap_or(0);
-    samples.sort_by_key(|s| (index(s), s.seed));
+    let Gathered {
+        samples,
+        fresh,
+        elapsed,
+    } = gather(
+        config,
+        &all,
+        BASE,
+        tick,
+        |s: &Sample| (s.setting.as_str(), s.seed),
+        run_one,
+    )?;
     let summaries = all
         .iter()
         .map(|c| {

@@ -387,6 +387,49 @@ pub(crate) fn plan(
 
 /// The samples kept from an earlier run's CSV for settings and seeds still
 /// planned (`key` names a sample's setting and seed).
+/// The samples of a study and what running them took.
+pub(crate) struct Gathered<S> {
+    /// Every sample, in setting then seed order.
+    pub samples: Vec<S>,
+    /// How many of them ran now (the rest were kept from the CSV).
+    pub fresh: usize,
+    pub elapsed: f64,
+}
+
+/// Plans every setting over the seeds, keeps the samples of the CSV beside
+/// `--out` with `--resume`, runs the rest, and orders them all.
+pub(crate) fn gather<S: serde::de::DeserializeOwned + Send>(
+    config: &Config,
+    all: &[Case],
+    base: &str,
+    tick: &(dyn Fn(usize) + Sync),
+    key: impl Fn(&S) -> (&str, u64) + Copy,
+    one: impl Fn(&Case, &Scene) -> S + Sync,
+) -> Result<Gathered<S>, TradeoffError> {
+    let mut jobs = plan(config, all, base)?;
+    let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
+    let kept: Vec<S> = if config.resume {
+        kept(&config.out.with_extension("csv"), &names, &jobs, key)
+    } else {
+        Vec::new()
+    };
+    jobs.retain(|(k, sc)| {
+        !kept
+            .iter()
+            .any(|s| key(s) == (all[*k].name.as_str(), sc.seed))
+    });
+    let (mut samples, elapsed) = run_jobs(config, &mut jobs, tick, |k, scene| one(&all[k], scene))?;
+    let fresh = samples.len();
+    samples.extend(kept);
+    let index = |s: &S| all.iter().position(|c| c.name == key(s).0).unwrap_or(0);
+    samples.sort_by_key(|s| (index(s), key(s).1));
+    Ok(Gathered {
+        samples,
+        fresh,
+        elapsed,
+    })
+}
+
 pub(crate) fn kept<S: serde::de::DeserializeOwned>(
     csv: &Path,
     names: &[String],
@@ -454,29 +497,18 @@ pub(crate) fn write_csv<S: Serialize>(path: &Path, samples: &[S]) -> Result<(), 
 /// number of runs to make, then with 0 after each run.
 pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, TradeoffError> {
     let all = cases();
-    let mut jobs = plan(config, &all, BASE)?;
-    let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
-    let kept: Vec<Sample> = if config.resume {
-        kept(
-            &config.out.with_extension("csv"),
-            &names,
-            &jobs,
-            |s: &Sample| (s.setting.as_str(), s.seed),
-        )
-    } else {
-        Vec::new()
-    };
-    jobs.retain(|(k, sc)| {
-        !kept
-            .iter()
-            .any(|s| s.setting == all[*k].name && s.seed == sc.seed)
-    });
-    let (mut samples, elapsed) =
-        run_jobs(config, &mut jobs, tick, |k, scene| run_one(&all[k], scene))?;
-    let fresh = samples.len();
-    samples.extend(kept);
-    let index = |s: &Sample| all.iter().position(|c| c.name == s.setting).unwrap_or(0);
-    samples.sort_by_key(|s| (index(s), s.seed));
+    let Gathered {
+        samples,
+        fresh,
+        elapsed,
+    } = gather(
+        config,
+        &all,
+        BASE,
+        tick,
+        |s: &Sample| (s.setting.as_str(), s.seed),
+        run_one,
+    )?;
     let summaries = (0..all.len())
         .map(|k| {
             let mine: Vec<&Sample> = samples
