@@ -35,7 +35,7 @@ pub struct BenchServiceArgs {
     #[arg(long, num_args = 1.., default_values_t = [100_000, 1_000_000])]
     samples: Vec<usize>,
     /// Samples of the end-to-end sweep (each about a second of work).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 40)]
     sweep_samples: u32,
 }
 
@@ -225,7 +225,7 @@ async fn sweep_time(workers: usize, samples: u32) -> anyhow::Result<f64> {
     let store = Store::open(&format!("sqlite://{}", dir.join("e2e.db").display())).await?;
     let spec: SweepSpec = serde_json::from_value(json!({
         "protocol": "fill_release",
-        "base": {"box": {"width": 3.0, "height": 3.0}},
+        "base": {"box": {"width": 4.0, "height": 4.0}},
         "samples": samples,
         "fidelity": "standard"
     }))?;
@@ -279,7 +279,7 @@ pub fn run_bench(args: BenchServiceArgs) -> anyhow::Result<ExitCode> {
         let one = sweep_time(1, args.sweep_samples).await?;
         let two = sweep_time(2, args.sweep_samples).await?;
         println!(
-            "sweep      {} fill-and-release samples (3 × 3 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
+            "sweep      {} fill-and-release samples (4 × 4 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
             args.sweep_samples,
             one / two
         );
