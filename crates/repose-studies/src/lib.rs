@@ -20,6 +20,7 @@ pub mod chart;
 pub mod compare;
 pub mod data;
 pub mod figure;
+pub mod fit;
 pub mod papers;
 pub mod reproduction;
 pub mod spec;

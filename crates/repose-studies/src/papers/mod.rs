@@ -8,6 +8,7 @@
 //! all three show the same thing. Adding a figure is one entry in its
 //! paper's list; adding a paper is a module and one line in [`PAPERS`].
 
+pub mod ep21;
 pub mod lh93;
 
 use crate::compare::Comparison;
