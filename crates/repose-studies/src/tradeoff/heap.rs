@@ -12,11 +12,12 @@
 //! collisions.
 
 use super::{
-    cores, gather, stats_cell, write_csv, Case, Config, Gathered, Group, Shift, TradeoffError,
+    cores, gather, preset_cases, stats_cell, write_csv, Case, Config, Gathered, Group, Shift,
+    TradeoffError,
 };
 use crate::chart::{Chart, Series, Style};
 use repose_physics::measure::Stats;
-use repose_physics::{protocols, Preset, Quiet, Scene, ENGINE};
+use repose_physics::{Quiet, Scene, ENGINE};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;
@@ -43,22 +44,7 @@ const REFERENCE: [&str; 3] = [
 ];
 
 fn knob(name: &str, what: &str, settings: &[&str]) -> Case {
-    let keys: Vec<&str> = settings
-        .iter()
-        .filter_map(|s| s.split('=').next())
-        .collect();
-    let mut o: Vec<String> = REFERENCE
-        .iter()
-        .filter(|r| !keys.iter().any(|k| r.starts_with(&format!("{k}="))))
-        .map(|s| s.to_string())
-        .collect();
-    o.extend(settings.iter().map(|s| s.to_string()));
-    Case {
-        group: Group::Knobs,
-        name: name.into(),
-        what: what.into(),
-        overrides: o,
-    }
+    Case::knob_over(&REFERENCE, name, what, settings)
 }
 
 fn cases() -> Vec<Case> {
@@ -68,19 +54,7 @@ fn cases() -> Vec<Case> {
         "Y = 630 MPa, Verlet, dt = T_col/10",
         &REFERENCE,
     )];
-    let heap = protocols::find("heap");
-    for p in Preset::ALL {
-        let what = heap
-            .map(|h| p.describe(h))
-            .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
-            .unwrap_or_default();
-        v.push(Case {
-            group: Group::Presets,
-            name: p.name().into(),
-            what,
-            overrides: vec![format!("preset={}", p.name())],
-        });
-    }
+    v.extend(preset_cases("heap"));
     v.push(Case {
         group: Group::Presets,
         name: "quick, no cohesion".into(),

@@ -132,13 +132,22 @@ impl Case {
 
     /// A knob: the reference with one setting changed.
     fn knob(name: &str, what: &str, setting: &str) -> Self {
-        let key = setting.split('=').next().unwrap_or_default();
-        let mut o: Vec<String> = REFERENCE
+        Case::knob_over(&REFERENCE, name, what, &[setting])
+    }
+
+    /// A knob of a study: its `reference` overrides with the keys of
+    /// `settings` replaced by them.
+    pub(crate) fn knob_over(reference: &[&str], name: &str, what: &str, settings: &[&str]) -> Self {
+        let keys: Vec<&str> = settings
             .iter()
-            .filter(|r| !r.starts_with(&format!("{key}=")))
+            .filter_map(|s| s.split('=').next())
+            .collect();
+        let mut o: Vec<String> = reference
+            .iter()
+            .filter(|r| !keys.iter().any(|k| r.starts_with(&format!("{k}="))))
             .map(|s| s.to_string())
             .collect();
-        o.push(setting.into());
+        o.extend(settings.iter().map(|s| s.to_string()));
         Case {
             group: Group::Knobs,
             name: name.into(),
@@ -148,6 +157,23 @@ impl Case {
     }
 }
 
+/// One case per fidelity preset, described by what it sets in `protocol`.
+pub(crate) fn preset_cases(protocol: &str) -> Vec<Case> {
+    let found = protocols::find(protocol);
+    Preset::ALL
+        .into_iter()
+        .map(|p| Case {
+            group: Group::Presets,
+            name: p.name().into(),
+            what: found
+                .map(|f| p.describe(f))
+                .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
+                .unwrap_or_default(),
+            overrides: vec![format!("preset={}", p.name())],
+        })
+        .collect()
+}
+
 fn cases() -> Vec<Case> {
     let mut v = vec![Case::new(
         Group::Reference,
@@ -155,20 +181,7 @@ fn cases() -> Vec<Case> {
         "Gear-5, dt = t_c/200, equilibrium window 0.2 s",
         &REFERENCE,
     )];
-    let tilt = protocols::find("tilt");
-    for p in Preset::ALL {
-        let setting = format!("preset={}", p.name());
-        let what = tilt
-            .map(|t| p.describe(t))
-            .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
-            .unwrap_or_default();
-        v.push(Case {
-            group: Group::Presets,
-            name: p.name().into(),
-            what,
-            overrides: vec![setting],
-        });
-    }
+    v.extend(preset_cases("tilt"));
     v.extend([
         Case::knob(
             "Verlet",
