@@ -64,6 +64,22 @@ impl Store {
         Ok(out)
     }
 
+    /// A sweep's state and spec as submitted, without its progress (for
+    /// the worker's top-up after every result).
+    pub async fn sweep_spec(&self, id: &str) -> Result<Option<(String, serde_json::Value)>> {
+        let row = sqlx::query(&self.sql("SELECT state, spec FROM sweeps WHERE id = $1"))
+            .bind(id)
+            .fetch_optional(&self.pool)
+            .await?;
+        row.map(|r| {
+            Ok((
+                r.get("state"),
+                serde_json::from_str(&r.get::<String, _>("spec"))?,
+            ))
+        })
+        .transpose()
+    }
+
     /// One sweep with its progress and ETA, or None.
     pub async fn sweep(&self, id: &str) -> Result<Option<SweepInfo>> {
         let Some(row) = sqlx::query(&self.sql(

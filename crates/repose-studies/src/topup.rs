@@ -42,14 +42,14 @@ pub fn more_needed(stats: Option<&Aggregate>, jobs: i64, target: f64, max: i64) 
 
 /// Adds the samples a sweep's points need; returns how many jobs it added.
 pub async fn top_up(store: &Store, sweep_id: &str, max_attempts: i64) -> Result<u64, TopUpError> {
-    let Some(info) = store.sweep(sweep_id).await? else {
+    let Some((state, spec)) = store.sweep_spec(sweep_id).await? else {
         return Ok(0);
     };
-    let spec: SweepSpec = serde_json::from_value(info.spec)?;
+    let spec: SweepSpec = serde_json::from_value(spec)?;
     let (Some(target), Some(metric)) = (spec.target_sem, spec.target_metric()) else {
         return Ok(0);
     };
-    if info.state == "cancelled" {
+    if state == "cancelled" {
         return Ok(0);
     }
     let max = spec.max_samples_per_point() as i64;
