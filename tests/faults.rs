@@ -166,24 +166,10 @@ async fn every_job_ends_done_once_through_kills_on_sqlite() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_job_ends_done_once_through_kills_and_a_restart_on_postgres() {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    let admin = match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
-        Ok(a) => a,
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping: no PostgreSQL ({e})");
-            return;
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    let Some(pg) = common::postgres().await else {
+        return;
     };
-    let name = format!("repose_faults_{}", uuid::Uuid::new_v4().simple());
-    sqlx::query(&format!("CREATE DATABASE {name}"))
-        .execute(&admin)
-        .await
-        .unwrap();
-    admin.close().await;
-    let db = format!("{server}/{name}");
+    let db = pg.url.clone();
     let store = Store::open(&db).await.unwrap();
     let (id, f) = through_faults(&db, &store, true).await;
     assert_done_once(&store, &id).await;
@@ -192,11 +178,5 @@ async fn every_job_ends_done_once_through_kills_and_a_restart_on_postgres() {
         "{f:?}"
     );
     println!("PostgreSQL: {JOBS} jobs done once through {f:?}");
-    store.pool().close().await;
-    let admin = sqlx::AnyPool::connect(&format!("{server}/postgres"))
-        .await
-        .unwrap();
-    let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
-        .execute(&admin)
-        .await;
+    pg.drop_now(store).await;
 }

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{create, finished, get, scratch, signal, wait_until, worker, Server, BIN};
+use common::{create, finished, get, postgres, scratch, signal, wait_until, worker, Server, BIN};
 
 /// Starts `count` worker processes that leave when the queue is empty,
 /// waits for all of them, and returns what each wrote to stderr.
@@ -161,47 +161,6 @@ fn cheap_sweep(samples: u32) -> SweepSpec {
         "samples": samples
     }))
     .unwrap()
-}
-
-/// A fresh PostgreSQL database for one test; dropped by [`PgDatabase::drop_now`].
-struct PgDatabase {
-    url: String,
-    admin: sqlx::AnyPool,
-    name: String,
-}
-
-impl PgDatabase {
-    async fn drop_now(self, store: Store) {
-        store.pool().close().await;
-        let _ = sqlx::query(&format!("DROP DATABASE {} WITH (FORCE)", self.name))
-            .execute(&self.admin)
-            .await;
-    }
-}
-
-async fn postgres() -> Option<PgDatabase> {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
-        Ok(admin) => {
-            let name = format!("repose_e2e_{}", uuid::Uuid::new_v4().simple());
-            sqlx::query(&format!("CREATE DATABASE {name}"))
-                .execute(&admin)
-                .await
-                .unwrap();
-            Some(PgDatabase {
-                url: format!("{server}/{name}"),
-                admin,
-                name,
-            })
-        }
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping: no PostgreSQL ({e})");
-            None
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
-    }
 }
 
 async fn assert_every_job_done_once(store: &Store, sweep: &str, jobs: &[JobSpec]) {

@@ -34,3 +34,5 @@ GRANT INSERT ON results, metric_values, point_metrics TO repose_worker;
 -- the samples a `target_sem` sweep adds to its points
 GRANT INSERT ON jobs TO repose_worker;
 GRANT DELETE ON point_metrics TO repose_worker;
+-- checkpoints of long samples: saved while running, dropped with the result
+GRANT SELECT, INSERT, UPDATE, DELETE ON checkpoints TO repose_worker;

@@ -163,3 +163,46 @@ pub fn signal(child: &Child, name: &str) {
         .expect("kill runs");
     assert!(status.success(), "kill -s {name} failed");
 }
+
+/// A fresh PostgreSQL database for one test; dropped by [`PgDatabase::drop_now`].
+pub struct PgDatabase {
+    pub url: String,
+    pub admin: sqlx::AnyPool,
+    pub name: String,
+}
+
+impl PgDatabase {
+    pub async fn drop_now(self, store: Store) {
+        store.pool().close().await;
+        let _ = sqlx::query(&format!("DROP DATABASE {} WITH (FORCE)", self.name))
+            .execute(&self.admin)
+            .await;
+    }
+}
+
+/// A fresh database on the test PostgreSQL server (`REPOSE_TEST_POSTGRES`,
+/// by default 127.0.0.1:5432); none when there is no server, except in CI.
+pub async fn postgres() -> Option<PgDatabase> {
+    let server = std::env::var("REPOSE_TEST_POSTGRES")
+        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
+    sqlx::any::install_default_drivers();
+    match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
+        Ok(admin) => {
+            let name = format!("repose_e2e_{}", uuid::Uuid::new_v4().simple());
+            sqlx::query(&format!("CREATE DATABASE {name}"))
+                .execute(&admin)
+                .await
+                .unwrap();
+            Some(PgDatabase {
+                url: format!("{server}/{name}"),
+                admin,
+                name,
+            })
+        }
+        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
+            eprintln!("skipping: no PostgreSQL ({e})");
+            None
+        }
+        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    }
+}

@@ -125,6 +125,10 @@ pub struct LeaseArgs {
     /// Heartbeat period in seconds.
     #[arg(long, default_value_t = 10.0)]
     heartbeat: f64,
+    /// Seconds between checkpoints of a long sample (heap and packing), so
+    /// that a worker taking the job over continues from the latest one; 0: never.
+    #[arg(long, default_value_t = 600.0)]
+    checkpoint_every: f64,
 }
 
 impl Default for LeaseArgs {
@@ -132,6 +136,7 @@ impl Default for LeaseArgs {
         LeaseArgs {
             lease: 60.0,
             heartbeat: 10.0,
+            checkpoint_every: 600.0,
         }
     }
 }
@@ -141,9 +146,14 @@ impl LeaseArgs {
         if !(self.lease > 0.0 && self.heartbeat > 0.0 && self.heartbeat < self.lease) {
             bail!("--heartbeat must be positive and shorter than --lease");
         }
+        if !(self.checkpoint_every >= 0.0 && self.checkpoint_every.is_finite()) {
+            bail!("--checkpoint-every must be a number of seconds, 0 or more");
+        }
         let mut c = WorkerConfig::new(owner);
         c.lease = Duration::from_secs_f64(self.lease);
         c.heartbeat = Duration::from_secs_f64(self.heartbeat);
+        c.checkpoint_every =
+            (self.checkpoint_every > 0.0).then(|| Duration::from_secs_f64(self.checkpoint_every));
         Ok(c)
     }
 }
@@ -191,8 +201,11 @@ pub(crate) fn runtime() -> anyhow::Result<tokio::runtime::Runtime> {
 pub(crate) fn init_logging() {
     let filter = tracing_subscriber::EnvFilter::try_from_env("REPOSE_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+    // Colours only on a terminal: logs written to files stay plain text.
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
+        .with_ansi(ansi)
         .with_writer(std::io::stderr)
         .try_init();
 }

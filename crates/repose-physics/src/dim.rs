@@ -13,6 +13,8 @@
 //! ([`Space::Angular`]).
 
 use nalgebra::SVector;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
@@ -28,6 +30,8 @@ pub trait Space<const D: usize>: 'static {
     /// The shear state of one contact (displacement or force along the tangent space).
     type Shear: Copy
         + Default
+        + Serialize
+        + DeserializeOwned
         + Debug
         + PartialEq
         + Send
@@ -60,6 +64,8 @@ pub trait Space<const D: usize>: 'static {
     /// in 2D, a vector in 3D.
     type Angular: Copy
         + Default
+        + Serialize
+        + DeserializeOwned
         + Debug
         + PartialEq
         + Send

@@ -13,7 +13,8 @@ use crate::dim::{Dim, Space};
 use crate::particles::Particles;
 use serde::{Deserialize, Serialize};
 
-pub trait Integrator<const D: usize>: Send + std::fmt::Debug
+pub trait Integrator<const D: usize>:
+    Send + std::fmt::Debug + Clone + Serialize + serde::de::DeserializeOwned
 where
     Dim<D>: Space<D>,
 {
@@ -69,7 +70,7 @@ impl Scheme {
 /// second order, but it also removes the numerical dissipation that lets
 /// piles built with the paper's shear spring come to rest: more of them end
 /// "not settled". This is the conventional scheme.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone, Serialize, Deserialize)]
 pub struct VelocityVerlet;
 
 impl VelocityVerlet {
@@ -161,7 +162,7 @@ const GEAR5: [f64; 6] = [
 /// plays no part in its contacts), so `dω/dt = τ/I` is integrated with
 /// the coefficients of the translation. That angle and its scaled
 /// derivatives, three components each, live in `spin`.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone, Serialize, Deserialize)]
 pub struct Gear5 {
     /// `[r2 (D values), r3, r4, r5]` for each grain, flattened.
     derivs: Vec<f64>,

@@ -51,6 +51,6 @@ pub mod theory;
 pub mod walls;
 
 pub use preset::Preset;
-pub use protocols::{run, Metric, Observer, Progress, Protocol, Quiet};
+pub use protocols::{run, Checkpoint, Metric, Observer, Progress, Protocol, Quiet};
 pub use report::{Outcome, RunReport, ENGINE};
 pub use scene::{FieldError, Scene, SceneError};

@@ -20,9 +20,12 @@
 use crate::dim::{Dim, Space, Vector};
 use crate::engine::Periodic;
 use crate::particles::Particles;
+use serde::{Deserialize, Serialize};
 
 /// Verlet pair list with one contact-history slot per pair.
-#[derive(Debug, Clone)]
+/// Everything but the scratch space of the search is state: a restored
+/// list goes on exactly as the saved one would have.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct NeighborList<const D: usize, H> {
     /// Extra distance beyond touching for a pair to enter the list, cm.
     pub skin: f64,
@@ -35,10 +38,15 @@ pub struct NeighborList<const D: usize, H> {
     /// How many times the list was built.
     pub builds: u64,
     anchor: Vec<Vector<D>>,
+    #[serde(skip)]
     grid: CellGrid<D>,
+    #[serde(skip)]
     scratch: Vec<(u32, Vector<D>)>,
+    #[serde(skip)]
     merged: Vec<([u32; 2], H)>,
+    #[serde(skip)]
     images: Vec<Vector<D>>,
+    #[serde(skip)]
     image_of: Vec<(u32, Vector<D>)>,
 }
 

@@ -53,7 +53,7 @@ pub fn vector_from<const D: usize>(values: &[f64]) -> Option<Vector<D>> {
 
 /// All grains of a simulation. Index `i` is an array slot and may change when
 /// grains leave; `id[i]` is the grain's stable name.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Particles<const D: usize>
 where
     Dim<D>: Space<D>,

@@ -9,8 +9,11 @@ use crate::dim::Vector;
 use crate::models::lee_herrmann::GrainSpec;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
+use serde::{Deserialize, Serialize};
 
-/// The scene's random stream.
+/// The scene's random stream; its state serialises, so a saved run goes
+/// on drawing the numbers it would have drawn.
+#[derive(Serialize, Deserialize)]
 pub struct Stream(ChaCha8Rng);
 
 impl Stream {

@@ -99,7 +99,7 @@ impl<const D: usize> Wall<D> {
 
 /// Grains near each wall (within their radius plus the skin at the last
 /// neighbour build) and the contact history of each.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct WallContacts<H> {
     /// For each wall, candidate grain indices, ascending.
     pub candidates: Vec<Vec<u32>>,

@@ -27,6 +27,7 @@
 //! what a protocol measures is whatever metrics its results carry.
 
 mod aggregates;
+mod checkpoints;
 pub mod export;
 mod query;
 mod queue;
@@ -38,6 +39,7 @@ use sqlx::AnyPool;
 use std::collections::BTreeMap;
 use std::time::{SystemTime, UNIX_EPOCH};
 
+pub use checkpoints::StoredCheckpoint;
 pub use query::{series, SeriesError, SeriesPoint};
 pub use queue::Retry;
 pub use topup::PointJobs;

@@ -252,6 +252,10 @@ impl Store {
         .bind(result.counts.particle_steps)
         .execute(&mut *tx)
         .await?;
+        sqlx::query(&self.sql("DELETE FROM checkpoints WHERE job_id = $1"))
+            .bind(job_id)
+            .execute(&mut *tx)
+            .await?;
         if inserted.rows_affected() == 1 {
             let failed = result.outcome != "completed";
             self.aggregate_result(&mut tx, sample_hash, failed, &result.metrics)

@@ -9,15 +9,21 @@
 //! so no job is ever left half-written: either its result and its `done`
 //! state are written together, or the job returns to the queue.
 //!
+//! A long sample (a heap or a packing) saves a checkpoint every
+//! `checkpoint_every` while it runs; the worker writes it to the store
+//! under its lease. A worker that claims a job with a checkpoint (its
+//! first worker died) continues from it, and the result is the one the
+//! first worker would have written, bit for bit.
+//!
 //! A run that ends without a result (not settled, blow-up) is still a
 //! result: its outcome and reason are stored like any other. Only a scene
 //! that cannot even be read marks the job failed.
 
-use repose_physics::{Observer, Progress, RunReport, Scene, SceneError};
+use repose_physics::{Checkpoint, Observer, Progress, RunReport, Scene, SceneError};
 use repose_store::{Claim, Lease, ResultRecord, RunCounts, Store};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use tokio::sync::watch;
 
 /// How a worker talks to the queue.
@@ -33,6 +39,8 @@ pub struct WorkerConfig {
     pub idle: Duration,
     /// Stop once the queue is empty instead of waiting for more work.
     pub exit_when_idle: bool,
+    /// Time between checkpoints of a resumable sample (none: never).
+    pub checkpoint_every: Option<Duration>,
 }
 
 impl WorkerConfig {
@@ -43,6 +51,7 @@ impl WorkerConfig {
             heartbeat: Duration::from_secs(10),
             idle: Duration::from_millis(500),
             exit_when_idle: false,
+            checkpoint_every: Some(Duration::from_secs(600)),
         }
     }
 }
@@ -60,12 +69,43 @@ pub struct Tally {
     pub failed: u64,
 }
 
-/// Stops a run when its flag is raised.
-struct StopFlag(Arc<AtomicBool>);
+/// What the run on the blocking thread shares with the worker: a flag
+/// that stops it, the checkpoint to continue from, and the latest
+/// checkpoint it saved (the worker writes it to the store).
+struct JobObserver {
+    job: String,
+    stop: Arc<AtomicBool>,
+    every: Option<Duration>,
+    last: Instant,
+    resume: Option<Checkpoint>,
+    saved: watch::Sender<Option<Checkpoint>>,
+}
 
-impl Observer for StopFlag {
+impl Observer for JobObserver {
     fn progress(&mut self, _update: &Progress) -> bool {
-        !self.0.load(Ordering::Relaxed)
+        !self.stop.load(Ordering::Relaxed)
+    }
+
+    fn checkpoint_due(&mut self) -> bool {
+        self.every.is_some_and(|every| self.last.elapsed() >= every)
+    }
+
+    fn save(&mut self, checkpoint: Checkpoint) {
+        self.last = Instant::now();
+        self.saved.send_replace(Some(checkpoint));
+    }
+
+    fn saved(&mut self) -> Option<Checkpoint> {
+        self.resume.take()
+    }
+
+    fn resumed(&mut self, result: Result<u64, String>) {
+        match result {
+            Ok(step) => tracing::info!(job = %self.job, step, "continuing from the checkpoint"),
+            Err(why) => {
+                tracing::warn!(job = %self.job, "checkpoint set aside, starting over: {why}")
+            }
+        }
     }
 }
 
@@ -249,16 +289,34 @@ async fn run_leased(
     shutdown: &mut watch::Receiver<bool>,
 ) -> (RunAnswer, bool, Lease) {
     let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
+    let (saved, mut checkpoints) = watch::channel(None);
+    let mut observer = JobObserver {
+        job: job.job_id.clone(),
+        stop: stop.clone(),
+        every: config.checkpoint_every,
+        last: Instant::now(),
+        resume: stored_checkpoint(store, job).await,
+        saved,
+    };
     let mut simulation =
-        tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut StopFlag(flag)));
+        tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut observer));
     let mut beat = tokio::time::interval(config.heartbeat);
     beat.tick().await;
     let mut lease = Lease::Held;
     let mut stopping = false;
+    let mut saving = true;
     let outcome = loop {
         tokio::select! {
             done = &mut simulation => break done,
+            changed = checkpoints.changed(), if saving => match changed {
+                Ok(()) => {
+                    let latest = checkpoints.borrow_and_update().clone();
+                    if let Some(c) = latest {
+                        write_checkpoint(store, config, job, &c).await;
+                    }
+                }
+                Err(_) => saving = false,
+            },
             _ = beat.tick() => {
                 match store.heartbeat(&job.job_id, &config.owner, config.lease).await {
                     Ok(Lease::Held) => {}
@@ -275,6 +333,36 @@ async fn run_leased(
         }
     };
     (outcome, stop.load(Ordering::Relaxed), lease)
+}
+
+/// The checkpoint a job's earlier worker saved, if any.
+async fn stored_checkpoint(store: &Store, job: &Claim) -> Option<Checkpoint> {
+    match store.checkpoint(&job.job_id).await {
+        Ok(found) => found.map(|c| Checkpoint {
+            time: c.sim_time,
+            iteration: u64::try_from(c.iteration).unwrap_or(0),
+            state: c.state,
+        }),
+        Err(e) => {
+            tracing::warn!(job = %job.job_id, "could not read the checkpoint, starting over: {e}");
+            None
+        }
+    }
+}
+
+/// Writes a checkpoint under the lease; a failed write only costs the
+/// work since the previous one.
+async fn write_checkpoint(store: &Store, config: &WorkerConfig, job: &Claim, c: &Checkpoint) {
+    match store
+        .save_checkpoint(&job.job_id, &config.owner, c.time, c.iteration, &c.state)
+        .await
+    {
+        Ok(true) => {
+            tracing::debug!(job = %job.job_id, step = c.iteration, bytes = c.state.len(), "checkpoint saved")
+        }
+        Ok(false) => tracing::warn!(job = %job.job_id, "lease lost: checkpoint not saved"),
+        Err(e) => tracing::warn!(job = %job.job_id, "could not save the checkpoint: {e}"),
+    }
 }
 
 /// What the store keeps of a report: its outcome, metrics and cost, and

@@ -2,6 +2,7 @@
 
 use super::{Shear, TangentialLaw, Touch};
 use crate::dim::{Dim, Space};
+use serde::{Deserialize, Serialize};
 
 /// No tangential force at all.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -45,7 +46,7 @@ pub struct CundallStrack<const TRUNCATE: bool> {
 }
 
 /// The Cundall–Strack spring of one contact: total shear displacement, cm.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ShearSpring<S> {
     pub displacement: S,
 }

@@ -29,6 +29,8 @@ pub use rolling::{Epsd2, RollingSpring};
 pub use viscoelastic::{Cap, MindlinSpring, TangentialSpring, ViscoelasticHertz};
 
 use crate::dim::{Dim, Space, Vector};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use std::fmt::Debug;
 
 type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
@@ -118,7 +120,7 @@ where
     Dim<D>: Space<D>,
 {
     /// Per-contact state; `Default` is a fresh contact.
-    type History: Copy + Default + Debug + PartialEq + Send + Sync;
+    type History: Copy + Default + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned;
 
     /// Advances the history by one step of length `dt` and returns the
     /// tangential force on `i`, given the tangential relative velocity of
@@ -147,7 +149,7 @@ where
     /// Whether this component acts at all (false for [`NoRolling`]).
     const ACTIVE: bool;
     /// Per-contact state; `Default` is a fresh contact.
-    type History: Copy + Default + Debug + PartialEq + Send + Sync;
+    type History: Copy + Default + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned;
 
     /// Advances the history and returns the rolling torque on `i` (`j`
     /// feels its opposite).
@@ -228,7 +230,7 @@ pub trait ContactLaw<const D: usize>: Copy + Send + Sync + Debug
 where
     Dim<D>: Space<D>,
 {
-    type History: Copy + Default + Debug + PartialEq + Send + Sync;
+    type History: Copy + Default + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned;
 
     /// Whether the law exerts torques: the grains then carry angular
     /// velocity, and the engine passes it in and integrates it.

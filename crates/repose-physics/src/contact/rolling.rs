@@ -3,6 +3,7 @@
 
 use super::{Angular, RollingLaw, Touch};
 use crate::dim::{Dim, Space};
+use serde::{Deserialize, Serialize};
 
 /// A torque that builds up with the relative rolling of a pair,
 /// `M_r ← M_r − k_r ω_rel Δt` with `k_r = k_t √δ R_eff²`, and slips at
@@ -19,7 +20,7 @@ pub struct Epsd2 {
 }
 
 /// The rolling torque held by one contact (on grain `i`), N·m.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct RollingSpring<A> {
     pub torque: A,
 }

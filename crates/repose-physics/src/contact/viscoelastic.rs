@@ -5,6 +5,7 @@
 
 use super::{NormalLaw, Shear, TangentialLaw, Touch};
 use crate::dim::{Dim, Space};
+use serde::{Deserialize, Serialize};
 
 /// `F_n = max(0, k_n δ^{3/2} + (3/2) A_n k_n √δ δ̇)` with
 /// `k_n = (2Y / (3(1 − ν²))) √R_eff` (eq. 10): never attractive.
@@ -86,7 +87,7 @@ pub struct MindlinSpring {
 }
 
 /// The tangential displacement `ξ` of one contact, m.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct TangentialSpring<S> {
     pub displacement: S,
 }

@@ -25,8 +25,10 @@ mod energy;
 mod forces;
 mod order;
 mod share;
+mod state;
 
 pub use boundary::{Outlet, Periodic};
+pub use state::{EngineState, StateOf};
 
 use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};
@@ -88,7 +90,7 @@ pub enum Blowup {
 }
 
 /// Safety limits checked every step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Guards {
     /// Largest overlap allowed, as a fraction of the smaller radius.
     pub max_overlap: f64,

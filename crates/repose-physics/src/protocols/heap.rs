@@ -237,20 +237,21 @@ impl EngineJob<3> for Job<'_> {
             0.25 * s.time,
             self.spec.height * s.d,
         );
+        let state = run
+            .resume(&[POUR, SETTLE])
+            .unwrap_or_else(|| PourState::new(self.scene.seed));
         let mut pour = Pour {
             spec: &self.spec,
             scales: s,
             grains: &self.grains,
-            stream: Stream::new(self.scene.seed),
-            inserted: 0,
-            crest: Vec::new(),
+            state,
         };
         let mut findings = Findings::default();
         let outcome = match pour.pour_and_settle(&mut run) {
             Ok(()) => measure(&run.sim.particles, &self.spec, s.d, &mut findings),
             Err(outcome) => outcome,
         };
-        findings.inserted = pour.inserted;
+        findings.inserted = pour.state.inserted;
         findings.series.push(pour.crest_curve());
         run.report(outcome, findings)
     }
@@ -287,15 +288,35 @@ fn plate<L: ContactLaw<3>, I: Integrator<3>>(
     sim
 }
 
-/// The state of the pour.
+/// The pour.
 struct Pour<'a> {
     spec: &'a HeapSpec,
     scales: Scales,
     grains: &'a Grains,
+    state: PourState,
+}
+
+/// What the pour carries from one insertion to the next besides the
+/// engine: all a checkpoint needs of it.
+#[derive(Serialize, Deserialize)]
+struct PourState {
     stream: Stream,
     inserted: usize,
     /// `[time, crest]` before each insertion, in √(d/g) and d.
     crest: Vec<[f64; 2]>,
+    /// Simulated time of the last insertion that added grains, s.
+    last_insertion: f64,
+}
+
+impl PourState {
+    fn new(seed: u64) -> PourState {
+        PourState {
+            stream: Stream::new(seed),
+            inserted: 0,
+            crest: Vec::new(),
+            last_insertion: 0.0,
+        }
+    }
 }
 
 impl Pour<'_> {
@@ -305,29 +326,30 @@ impl Pour<'_> {
     ) -> Result<(), Outcome> {
         let s = self.scales;
         let steps = ((self.spec.interval * s.time / run.sim.dt).round() as u64).max(1);
-        let mut last_insertion = 0.0;
-        while self.inserted < self.spec.max_grains {
+        while self.state.inserted < self.spec.max_grains {
+            run.checkpoint(&self.state);
             let crest = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
-            self.crest.push([run.sim.time / s.time, crest / s.d]);
+            self.state.crest.push([run.sim.time / s.time, crest / s.d]);
             let top = self.spec.height * s.d;
             if crest > top - s.d {
                 return Err(Outcome::Unmeasurable {
                     reason: format!(
                         "the heap's crest reached the top of the domain ({:.1} d) after {} grains: no heap forms at this cohesion (regime I of Elekes & Parteli)",
-                        self.spec.height, self.inserted
+                        self.spec.height, self.state.inserted
                     ),
                 });
             }
             let added = self.insert(&mut run.sim, crest.max(self.spec.inlet_floor * s.d));
             if added > 0 {
-                last_insertion = run.sim.time;
+                self.state.last_insertion = run.sim.time;
             }
             run.advance(POUR, steps)
                 .map_err(|stop| stop.outcome(POUR, String::new))?;
         }
         let rest = s.rest_energy(self.spec.rest_energy);
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
-        pour::settle(run, SETTLE, last_insertion, window, rest).map_err(|stop: Stop| {
+        let since = self.state.last_insertion;
+        pour::settle(run, SETTLE, since, window, rest, &self.state).map_err(|stop: Stop| {
             stop.outcome(SETTLE, || {
                 format!(
                     "the heap still moved {:.0} √(d/g) after the last insertion (kinetic energy per grain above {:.0e} m g d)",
@@ -364,7 +386,7 @@ impl Pour<'_> {
                 inside += 4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3);
             }
         }
-        let budget = self.spec.max_grains - self.inserted;
+        let budget = self.spec.max_grains - self.state.inserted;
         let fraction = self.spec.fill_fraction;
         let new = pour::fill(
             &region,
@@ -372,13 +394,13 @@ impl Pour<'_> {
             &mut placer,
             inside,
             self.grains,
-            &mut self.stream,
+            &mut self.state.stream,
             budget,
         );
         for (x, dia) in &new {
             sim.insert(*x, Vector::<3>::zeros(), 0.5 * dia, self.grains.mass(*dia));
         }
-        self.inserted += new.len();
+        self.state.inserted += new.len();
         new.len()
     }
 
@@ -388,7 +410,7 @@ impl Pour<'_> {
             title: "height of the heap's crest before each insertion".into(),
             x_label: "time (√(d/g))".into(),
             y_label: "crest (d)".into(),
-            points: self.crest.clone(),
+            points: self.state.crest.clone(),
             band: None,
         }
     }

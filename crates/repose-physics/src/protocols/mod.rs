@@ -16,9 +16,11 @@ pub mod heap;
 pub mod packing;
 pub mod pile;
 pub mod pour;
+pub mod resume;
 pub mod runner;
 pub mod tilt;
 
+pub use resume::Checkpoint;
 pub use runner::{Observer, Progress, Quiet};
 
 use crate::preset::Preset;

@@ -217,7 +217,9 @@ impl EngineJob<3> for Job<'_> {
         let rest = s.rest_energy(self.spec.rest_energy);
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let mut findings = Findings::default();
-        let outcome = match pour::settle(&mut run, SETTLE, 0.0, window, rest) {
+        // Settling is the whole run: the engine is all its state.
+        run.resume::<()>(&[SETTLE]);
+        let outcome = match pour::settle(&mut run, SETTLE, 0.0, window, rest, &()) {
             Ok(()) => measure(&run.sim, &self.spec, s.d, &mut findings),
             Err(stop) => stop.outcome(SETTLE, || {
                 format!(

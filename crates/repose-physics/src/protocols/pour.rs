@@ -12,6 +12,7 @@ use crate::preset::Preset;
 use crate::report::Phase;
 use crate::scene::{Checks, Scene, SceneError};
 use crate::setup::Stream;
+use serde::Serialize;
 use serde_json::Value;
 use std::collections::HashMap;
 
@@ -235,15 +236,18 @@ pub fn fill(
 
 /// Runs until the translational kinetic energy per grain is below `rest`
 /// and at least `min_time` has passed since `since`; fails with
-/// [`Stop::TimedOut`] once `max_time` has passed since then.
+/// [`Stop::TimedOut`] once `max_time` has passed since then. Every check
+/// is a resumable point, where the protocol's own state is `state`.
 pub fn settle<L: ContactLaw<3>, I: Integrator<3>>(
     run: &mut Runner<'_, 3, L, I>,
     phase: Phase,
     since: f64,
     (min_time, max_time): (f64, f64),
     rest: f64,
+    state: &impl Serialize,
 ) -> Result<(), Stop> {
     loop {
+        run.checkpoint(state);
         let point = run.sample(phase)?;
         let waited = run.sim.time - since;
         if waited >= min_time && point.kinetic_energy < rest {

@@ -2,6 +2,7 @@
 //! kinetic energy and let the observer stop the run, turn early stops into
 //! outcomes, and assemble the report.
 
+use super::resume::{self, Checkpoint, Header, Saved, SavedPoint};
 use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};
 use crate::engine::{Blowup, Simulation};
@@ -13,6 +14,8 @@ use crate::report::{
 };
 use crate::scene::Scene;
 use crate::walls::{Wall, WallSpec};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -21,6 +24,25 @@ use std::time::Instant;
 pub trait Observer {
     /// Called at every check; return `false` to stop the run.
     fn progress(&mut self, update: &Progress) -> bool;
+
+    /// Asked at each resumable point of a protocol that can resume:
+    /// whether to save the run now.
+    fn checkpoint_due(&mut self) -> bool {
+        false
+    }
+
+    /// Keeps a checkpoint (the latest replaces any earlier one).
+    fn save(&mut self, _checkpoint: Checkpoint) {}
+
+    /// The checkpoint to continue from, if any (asked once, at the start
+    /// of a resumable run).
+    fn saved(&mut self) -> Option<Checkpoint> {
+        None
+    }
+
+    /// Told whether the checkpoint it handed over was used: the step it
+    /// resumed from, or why the run started over.
+    fn resumed(&mut self, _result: Result<u64, String>) {}
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -87,6 +109,8 @@ where
     /// Steps between two checks.
     pub check_steps: u64,
     clock: Instant,
+    /// Wall-clock seconds spent before a resumed run's checkpoint.
+    earlier: f64,
     initial: usize,
 }
 
@@ -114,6 +138,7 @@ where
             trace: Vec::new(),
             check_steps,
             clock: Instant::now(),
+            earlier: 0.0,
             initial,
         }
     }
@@ -159,9 +184,75 @@ where
         Ok(())
     }
 
+    /// At a resumable point of the protocol, whose own state there is
+    /// `state`: saves the run if the observer asks for it.
+    pub fn checkpoint<P: Serialize>(&mut self, state: &P) {
+        if !self.observer.checkpoint_due() {
+            return;
+        }
+        let saved = Saved {
+            header: self.header(),
+            engine: self.sim.save_state(),
+            trace: self.trace.iter().map(SavedPoint::of).collect(),
+            wall_time: self.earlier + self.clock.elapsed().as_secs_f64(),
+            protocol: state,
+        };
+        // A state that cannot be encoded is not saved; the run goes on.
+        if let Ok(bytes) = resume::encode(&saved) {
+            self.observer.save(Checkpoint {
+                time: self.sim.time,
+                iteration: self.sim.iteration,
+                state: bytes,
+            });
+        }
+    }
+
+    /// Continues from the observer's checkpoint, if it has one that this
+    /// scene and build wrote: restores the engine and the trace (whose
+    /// phases are among `phases`) and returns the protocol's state. A
+    /// checkpoint that does not fit is set aside, the observer told why,
+    /// and the run starts from the beginning.
+    pub fn resume<P: DeserializeOwned>(&mut self, phases: &[Phase]) -> Option<P> {
+        let checkpoint = self.observer.saved()?;
+        let result = self.restore::<P>(&checkpoint.state, phases);
+        let answer = result
+            .as_ref()
+            .map(|_| self.sim.iteration)
+            .map_err(Clone::clone);
+        self.observer.resumed(answer);
+        result.ok()
+    }
+
+    fn restore<P: DeserializeOwned>(
+        &mut self,
+        bytes: &[u8],
+        phases: &[Phase],
+    ) -> Result<P, String> {
+        let saved: Saved<crate::engine::StateOf<D, L, I>, P> =
+            resume::decode(bytes, &self.header())?;
+        let trace = saved
+            .trace
+            .iter()
+            .map(|p| p.point(phases))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.sim.restore_state(saved.engine)?;
+        self.trace = trace;
+        self.earlier = saved.wall_time;
+        self.clock = Instant::now();
+        Ok(saved.protocol)
+    }
+
+    fn header(&self) -> Header {
+        Header::new(
+            std::any::type_name::<(L, I)>(),
+            &self.scene.protocol,
+            self.scene.seed,
+        )
+    }
+
     /// The report of the run so far, with the protocol's findings.
     pub fn report(&self, outcome: Outcome, findings: Findings) -> RunReport {
-        let wall_time = self.clock.elapsed().as_secs_f64();
+        let wall_time = self.earlier + self.clock.elapsed().as_secs_f64();
         let sim = &self.sim;
         let p = &sim.particles;
         let scene = self.scene;

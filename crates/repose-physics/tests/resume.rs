@@ -1,0 +1,169 @@
+//! Checkpoints: a run continued from any of its saved points ends with the
+//! same numbers, bit for bit, as the run that never stopped — for the
+//! poured heap (engine, pour stream and counters) and the packed column
+//! (engine only, on the Gear integrator), across a change of thread count, and a checkpoint that
+//! does not belong to the scene is set aside rather than trusted.
+
+use repose_physics::{run, Checkpoint, Observer, Progress, RunReport, Scene};
+use serde_json::Value;
+
+/// Saves at every resumable point, or hands over one checkpoint.
+#[derive(Default)]
+struct Recorder {
+    every: bool,
+    kept: Vec<Checkpoint>,
+    give: Option<Checkpoint>,
+    resumed: Vec<Result<u64, String>>,
+}
+
+impl Observer for Recorder {
+    fn progress(&mut self, _update: &Progress) -> bool {
+        true
+    }
+    fn checkpoint_due(&mut self) -> bool {
+        self.every
+    }
+    fn save(&mut self, checkpoint: Checkpoint) {
+        self.kept.push(checkpoint);
+    }
+    fn saved(&mut self) -> Option<Checkpoint> {
+        self.give.take()
+    }
+    fn resumed(&mut self, result: Result<u64, String>) {
+        self.resumed.push(result);
+    }
+}
+
+/// A small cohesive heap with rolling resistance: every kind of contact
+/// history (tangential spring, rolling torque, cohesive capture) is live.
+const HEAP: &str = r#"
+protocol = "heap"
+preset = "quick"
+seed = 5
+[material]
+surface_energy = 0.01
+[heap]
+plate = 12
+height = 16
+inlet_floor = 8
+max_grains = 240
+interval = 2.0
+settle_min = 5
+settle_max = 60
+"#;
+
+/// A small column on the Gear predictor-corrector, whose history of
+/// higher derivatives is state too.
+const PACKING: &str = r#"
+protocol = "packing"
+preset = "standard"
+seed = 2
+[numerics]
+integrator = "gear5"
+dt_factor = 0.02
+[packing]
+width = 5
+height = 12
+"#;
+
+fn scene(text: &str, extra: &[&str]) -> Scene {
+    let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    Scene::from_toml(text, &o).unwrap()
+}
+
+/// Every simulated number of a report: all but the wall-clock timings.
+fn numbers(r: &RunReport) -> Value {
+    let mut v = serde_json::to_value(r).unwrap();
+    let o = v.as_object_mut().unwrap();
+    for timing in ["wall_time", "particle_steps_per_second", "scene"] {
+        o.remove(timing);
+    }
+    let c = o["counters"].as_object_mut().unwrap();
+    for stage in ["integrate", "neighbours", "contacts", "walls"] {
+        c.remove(stage);
+    }
+    v
+}
+
+fn resumed_from(scene: &Scene, checkpoint: &Checkpoint) -> (RunReport, Recorder) {
+    let mut obs = Recorder {
+        give: Some(checkpoint.clone()),
+        ..Recorder::default()
+    };
+    let report = run(scene, &mut obs).unwrap();
+    (report, obs)
+}
+
+/// Runs once saving at every point, then resumes from a spread of them.
+fn resumes_bit_for_bit(text: &str, picks: usize) {
+    let base = scene(text, &[]);
+    let mut all = Recorder {
+        every: true,
+        ..Recorder::default()
+    };
+    let whole = run(&base, &mut all).unwrap();
+    assert!(whole.outcome.is_completed(), "{:?}", whole.outcome);
+    let n = all.kept.len();
+    assert!(n > picks, "only {n} checkpoints");
+    let bytes: usize = all.kept.iter().map(|c| c.state.len()).sum::<usize>() / n;
+    println!("{n} checkpoints, {bytes} bytes each on average");
+    let expected = numbers(&whole);
+    for k in 0..picks {
+        let cp = &all.kept[1 + k * (n - 2) / (picks - 1).max(1)];
+        let (again, obs) = resumed_from(&base, cp);
+        assert_eq!(obs.resumed, vec![Ok(cp.iteration)]);
+        assert!(cp.iteration <= whole.iterations);
+        assert!(
+            numbers(&again) == expected,
+            "resumed at step {} of {}: the numbers differ",
+            cp.iteration,
+            whole.iterations
+        );
+    }
+    // Resumed on two threads: still the same numbers.
+    let two = scene(text, &["numerics.threads=2"]);
+    let (again, _) = resumed_from(&two, &all.kept[n / 2]);
+    assert_eq!(again.metrics, whole.metrics);
+    assert_eq!(again.final_state, whole.final_state);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_heap_resumed_from_any_checkpoint_ends_bit_for_bit_as_the_whole_run() {
+    resumes_bit_for_bit(HEAP, 4);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_packing_resumed_from_a_checkpoint_ends_bit_for_bit_as_the_whole_run() {
+    resumes_bit_for_bit(PACKING, 2);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_checkpoint_of_another_scene_or_damaged_is_set_aside() {
+    let base = scene(HEAP, &["heap.max_grains=60", "heap.settle_max=20"]);
+    let mut all = Recorder {
+        every: true,
+        ..Recorder::default()
+    };
+    let whole = run(&base, &mut all).unwrap();
+    let cp = all.kept[all.kept.len() / 2].clone();
+    // Another seed: the header differs, the run starts over.
+    let other = scene(
+        HEAP,
+        &["heap.max_grains=60", "heap.settle_max=20", "seed=6"],
+    );
+    let (r, obs) = resumed_from(&other, &cp);
+    let reason = obs.resumed[0].as_ref().unwrap_err();
+    assert!(reason.contains("another build or scene"), "{reason}");
+    let fresh = run(&other, &mut Recorder::default()).unwrap();
+    assert_eq!(numbers(&r), numbers(&fresh));
+    // Damaged bytes: unreadable, the run starts over.
+    let mut broken = cp.clone();
+    let cut = broken.state.len() / 2;
+    broken.state.truncate(cut);
+    let (r, obs) = resumed_from(&base, &broken);
+    assert!(obs.resumed[0].as_ref().unwrap_err().contains("unreadable"));
+    assert_eq!(numbers(&r), numbers(&whole));
+}

@@ -1,0 +1,171 @@
+//! A long sample survives its worker: a heap's worker saves a checkpoint
+//! every second and is killed with SIGKILL mid-pour; a second worker takes
+//! the job over once the lease runs out, continues from the checkpoint,
+//! and stores the result an uninterrupted run of the same scene gives, bit
+//! for bit. On SQLite and on PostgreSQL.
+
+use repose_physics::{Quiet, Scene};
+use repose_store::Store;
+use repose_studies::SweepSpec;
+use serde_json::{json, Value};
+use std::io::Read;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+#[path = "common/mod.rs"]
+mod common;
+
+use common::{create, scratch, signal, BIN};
+
+/// A heap of a few seconds: 3000 grains poured on a 20 d plate.
+fn spec() -> SweepSpec {
+    serde_json::from_value(json!({
+        "protocol": "heap",
+        "base": {
+            "material": {"surface_energy": 0.0},
+            "heap": {"plate": 20.0, "max_grains": 3000, "settle_max": 100.0}
+        },
+        "seed_base": 7,
+        "fidelity": "quick"
+    }))
+    .unwrap()
+}
+
+fn start_worker(database: &str) -> Child {
+    Command::new(BIN)
+        .args(["worker", "--database", database])
+        .args([
+            "--lease",
+            "3",
+            "--heartbeat",
+            "1",
+            "--checkpoint-every",
+            "1",
+        ])
+        .env("REPOSE_LOG", "repose_worker=info")
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("repose worker starts")
+}
+
+/// Every simulated number of a report (its timings left out), as the
+/// text JSON writes it: equal text means equal bits.
+fn numbers(report: &str) -> Value {
+    let mut v: Value = serde_json::from_str(report).unwrap();
+    let o = v.as_object_mut().unwrap();
+    for timing in ["wall_time", "particle_steps_per_second"] {
+        o.remove(timing);
+    }
+    let c = o["counters"].as_object_mut().unwrap();
+    for stage in ["integrate", "neighbours", "contacts", "walls"] {
+        c.remove(stage);
+    }
+    v
+}
+
+async fn wait_for<T, F: std::future::Future<Output = Option<T>>>(
+    what: &str,
+    mut probe: impl FnMut() -> F,
+) -> T {
+    let start = Instant::now();
+    loop {
+        if let Some(t) = probe().await {
+            return t;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "no {what}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+async fn resumes_after_a_kill(database: &str) {
+    let store = Store::open(database).await.unwrap();
+    let (created, _) = create(&store, &spec(), 3).await;
+    let job: String = sqlx::query_scalar("SELECT id FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+
+    let mut first = start_worker(database);
+    // Two checkpoints in, the first worker dies without a word.
+    let saved = wait_for("first checkpoint", || async {
+        store.checkpoint(&job).await.unwrap()
+    })
+    .await;
+    let later = wait_for("later checkpoint", || async {
+        let c = store.checkpoint(&job).await.unwrap()?;
+        (c.iteration > saved.iteration).then_some(c)
+    })
+    .await;
+    signal(&first, "KILL");
+    let _ = first.wait();
+    assert_eq!(store.progress(&created.id).await.unwrap().done, 0);
+
+    let mut second = start_worker(database);
+    wait_for("result", || async {
+        let p = store.progress(&created.id).await.unwrap();
+        (p.done == 1).then_some(())
+    })
+    .await;
+    signal(&second, "KILL");
+    let _ = second.wait();
+    let mut log = String::new();
+    second
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+
+    let stored: String = sqlx::query_scalar("SELECT report FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert!(store.checkpoint(&job).await.unwrap().is_none());
+    // The same scene, run here without a stop.
+    let scene: String = sqlx::query_scalar("SELECT scene FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    let scene = Scene::from_stored(serde_json::from_str(&scene).unwrap()).unwrap();
+    let whole = repose_physics::run(&scene, &mut Quiet).unwrap();
+    assert!(whole.outcome.is_completed(), "{:?}", whole.outcome);
+    let resumed_at = log
+        .lines()
+        .find(|l| l.contains("continuing from the checkpoint"))
+        .unwrap_or_else(|| panic!("the second worker did not resume:\n{log}"));
+    // The first worker may have saved once more between the probe and the kill.
+    let step: u64 = resumed_at
+        .split("step=")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no step in {resumed_at}"));
+    assert!(
+        step >= later.iteration as u64 && step < whole.iterations,
+        "{resumed_at}"
+    );
+    assert!(
+        numbers(&stored) == numbers(&serde_json::to_string(&whole).unwrap()),
+        "the resumed result differs from the uninterrupted run"
+    );
+    println!(
+        "{database}: worker killed after its checkpoint at step {} of {} ({:.2} of {:.2} s simulated, {} bytes); the next resumed at step {step}",
+        later.iteration, whole.iterations, later.sim_time, whole.simulated_time, later.state.len()
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_workers_heap_resumes_bit_for_bit_on_sqlite() {
+    let db = format!("sqlite://{}", scratch("resume.db").display());
+    resumes_after_a_kill(&db).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_workers_heap_resumes_bit_for_bit_on_postgres() {
+    let Some(pg) = common::postgres().await else {
+        return;
+    };
+    resumes_after_a_kill(&pg.url).await;
+    let store = Store::open(&pg.url).await.unwrap();
+    pg.drop_now(store).await;
+}
