@@ -70,6 +70,14 @@ impl Comparison {
     }
 }
 
+impl Comparison {
+    /// The same row with another verdict (`no result`, `not resolved`).
+    pub fn with_verdict(mut self, verdict: &str) -> Comparison {
+        self.verdict = verdict.to_string();
+        self
+    }
+}
+
 /// `agrees` within [`AGREEMENT`] standard errors, else `differs`.
 pub fn verdict(sigma: Option<f64>) -> String {
     match sigma {

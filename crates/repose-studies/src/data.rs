@@ -66,7 +66,7 @@ impl SweepData {
             .filter(|p| fixed.is_none_or(|(k, val)| same(p.point.get(k), val)))
             .filter_map(|p| {
                 let a = p.metrics.get(metric).copied().filter(|a| a.n > 0)?;
-                Some((p.point.get(x)?.as_f64()?, a))
+                Some((crate::papers::x_value(&p.point, x)?, a))
             })
             .collect();
         v.sort_by(|a, b| a.0.total_cmp(&b.0));

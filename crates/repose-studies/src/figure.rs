@@ -3,7 +3,8 @@
 //! of the sweeps behind it, with its theory curves evaluated here.
 
 use crate::data::{same, StudyData, SweepData};
-use crate::papers::{Figure, Layer};
+use crate::fit::Fit;
+use crate::papers::{series_value, x_value, Figure, Layer};
 use repose_store::Aggregate;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -27,6 +28,26 @@ pub struct FigureData {
     pub sweeps: BTreeMap<String, String>,
     /// Study sweeps the figure reads that have no data yet.
     pub missing: Vec<String>,
+    /// The fits drawn, with their constants.
+    #[serde(default)]
+    pub fits: Vec<FitData>,
+}
+
+/// A fit a figure draws: the fitted constants with their intervals, or
+/// why it could not be made.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct FitData {
+    /// What was fitted, e.g. "eq. 1, g̃ = 1".
+    pub label: String,
+    /// The series it belongs to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
+    pub series_value: Option<Value>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<Fit>,
+    /// Why there is no fit (too few points, no convergence).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
 }
 
 /// What kind of series it is, for drawing.
@@ -43,6 +64,8 @@ pub enum Kind {
     Recorded,
     /// A level line.
     Level,
+    /// A curve fitted to measured means.
+    Fit,
 }
 
 /// One series of a figure.
@@ -84,10 +107,13 @@ pub struct PlotPoint {
     /// The single samples' values.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub samples: Vec<f64>,
+    /// A remark the figure marks the point with (e.g. "regime I").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flag: Option<String>,
 }
 
 impl PlotPoint {
-    fn value(x: f64, y: f64) -> Self {
+    pub fn value(x: f64, y: f64) -> Self {
         PlotPoint {
             x,
             y: Some(y),
@@ -96,6 +122,7 @@ impl PlotPoint {
             n: None,
             failures: None,
             samples: Vec::new(),
+            flag: None,
         }
     }
 }
@@ -127,6 +154,7 @@ impl Figure {
             series: Vec::new(),
             sweeps: BTreeMap::new(),
             missing: Vec::new(),
+            fits: Vec::new(),
         };
         for key in self.sweeps() {
             match study.get(&key) {
@@ -138,6 +166,12 @@ impl Figure {
         }
         for layer in &self.layers {
             out.series.extend(self.layer(layer, study));
+            out.fits.extend(crate::fitted::fits(
+                layer,
+                study,
+                self.log_x,
+                &mut out.series,
+            ));
         }
         let range = x_range(&out.series).filter(|(lo, hi)| hi > lo);
         for layer in &self.layers {
@@ -155,7 +189,11 @@ impl Figure {
         for layer in &self.layers {
             if let Layer::Measured { x, series, y, .. } = layer {
                 for axis in std::iter::once(*x).chain(*series) {
-                    if !sweep.points.iter().any(|p| p.point.contains_key(axis)) {
+                    if !sweep
+                        .points
+                        .iter()
+                        .any(|p| x_value(&p.point, axis).is_some())
+                    {
                         return Err(FigureError::Axis(axis.to_string()));
                     }
                 }
@@ -223,7 +261,10 @@ impl Figure {
                 .and_then(|d| recorded(d, curve, label))
                 .into_iter()
                 .collect(),
-            Layer::Curve { .. } | Layer::Level { .. } => Vec::new(),
+            Layer::Curve { .. }
+            | Layer::Level { .. }
+            | Layer::Fit { .. }
+            | Layer::Computed { .. } => Vec::new(),
         }
     }
 }
@@ -248,7 +289,9 @@ fn summed(p: &repose_store::Point, y: &[&str]) -> Option<Aggregate> {
     })
 }
 
-fn measured(
+/// Means of `y` (summed over its metrics) along `x`, one series per
+/// value of `series`.
+pub(crate) fn measured(
     d: &SweepData,
     x: &str,
     series: Option<&str>,
@@ -258,7 +301,7 @@ fn measured(
     // Series values in order of first appearance, then sorted numerically.
     let mut values: Vec<Option<Value>> = Vec::new();
     for p in &d.points {
-        let v = series.map(|s| p.point.get(s).cloned().unwrap_or(Value::Null));
+        let v = series.map(|s| series_value(&p.point, s));
         if !values.contains(&v) {
             values.push(v);
         }
@@ -271,9 +314,9 @@ fn measured(
             let mut points: Vec<PlotPoint> = d
                 .points
                 .iter()
-                .filter(|p| series.map(|s| p.point.get(s).cloned().unwrap_or(Value::Null)) == value)
+                .filter(|p| series.map(|s| series_value(&p.point, s)) == value)
                 .filter_map(|p| {
-                    let xv = p.point.get(x)?.as_f64()?;
+                    let xv = x_value(&p.point, x)?;
                     let agg = summed(p, y).unwrap_or(Aggregate::EMPTY);
                     Some(PlotPoint {
                         x: xv,
@@ -283,6 +326,7 @@ fn measured(
                         n: Some(agg.n),
                         failures: Some(p.failures),
                         samples: sample_values(d, &p.point, y),
+                        flag: None,
                     })
                 })
                 .collect();
@@ -358,7 +402,7 @@ fn recorded(d: &SweepData, curve: &str, label: &str) -> Option<SeriesData> {
 }
 
 /// The x range the measured and recorded series span.
-fn x_range(series: &[SeriesData]) -> Option<(f64, f64)> {
+pub(crate) fn x_range(series: &[SeriesData]) -> Option<(f64, f64)> {
     let xs = series
         .iter()
         .filter(|s| matches!(s.kind, Kind::Measured | Kind::Recorded))
@@ -370,7 +414,13 @@ fn x_range(series: &[SeriesData]) -> Option<(f64, f64)> {
 }
 
 /// A theory curve sampled at 41 points over `[lo, hi]`.
-fn curve(label: &str, f: fn(f64) -> Option<f64>, lo: f64, hi: f64, log: bool) -> SeriesData {
+pub(crate) fn curve(
+    label: &str,
+    f: impl Fn(f64) -> Option<f64>,
+    lo: f64,
+    hi: f64,
+    log: bool,
+) -> SeriesData {
     let at = |k: usize| {
         let t = k as f64 / 40.0;
         if log && lo > 0.0 {

@@ -8,11 +8,11 @@
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// A curve `y = f(x; p)` with named parameters.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub struct Model {
     pub name: &'static str,
     pub params: &'static [&'static str],
@@ -29,7 +29,7 @@ pub struct Datum {
 }
 
 /// A fitted parameter with its standard error and 95 % interval.
-#[derive(Debug, Clone, PartialEq, Serialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Param {
     pub name: String,
     pub value: f64,
@@ -39,7 +39,7 @@ pub struct Param {
 }
 
 /// A fit: its parameters, degrees of freedom and goodness.
-#[derive(Debug, Clone, PartialEq, Serialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Fit {
     pub model: String,
     pub params: Vec<Param>,

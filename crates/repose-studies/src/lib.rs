@@ -11,6 +11,8 @@
 //!   its sweeps: what the API serves, the page draws and the reports print.
 //! * [`reproduction`] and [`tradeoff`] — the two reports: a paper reproduced
 //!   through the service, and what each fidelity setting costs and changes.
+//! * [`fit`] and [`fitted`] — least squares with confidence intervals, and
+//!   the papers' fits drawn on figures.
 //! * [`chart`] — static SVG charts for the reports.
 //!
 //! **Architecture Invariant:** theory is evaluated here, in Rust, once. The
@@ -21,6 +23,7 @@ pub mod compare;
 pub mod data;
 pub mod figure;
 pub mod fit;
+pub mod fitted;
 pub mod papers;
 pub mod reproduction;
 pub mod spec;

@@ -63,7 +63,7 @@ pub fn chart(fig: &FigureData) -> Chart {
     for s in &fig.series {
         let style = match s.kind {
             Kind::Measured => Style::Points,
-            Kind::Theory | Kind::Recorded => Style::Line,
+            Kind::Theory | Kind::Recorded | Kind::Fit => Style::Line,
             Kind::Quoted => Style::Open,
             Kind::Level => Style::Dashed,
         };

@@ -17,6 +17,7 @@ pub static PAPER: Paper = Paper {
     sweeps,
     figures,
     compare,
+    quantities: &[],
 };
 
 /// θ_R by the three slope methods at μ = 0.2 (10 samples): (metric, mean, sd).

@@ -12,9 +12,12 @@ pub mod ep21;
 pub mod lh93;
 
 use crate::compare::Comparison;
-use crate::data::StudyData;
+use crate::data::{StudyData, SweepData};
+use crate::figure::{FitData, SeriesData};
+use crate::fit::Model;
 use crate::spec::SweepSpec;
 use repose_physics::Preset;
+use repose_store::Point;
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
@@ -31,10 +34,42 @@ pub struct Paper {
     pub figures: fn() -> Vec<Figure>,
     /// The paper's stated results against ours.
     pub compare: fn(&StudyData) -> Vec<Comparison>,
+    /// Quantities its figures plot that are computed from a point's axis
+    /// values (the Bond number from d and g, say).
+    pub quantities: &'static [Quantity],
+}
+
+/// A quantity computed from the axis values of a point.
+pub struct Quantity {
+    /// The name figures use in place of an axis, e.g. `ep21.bond`.
+    pub name: &'static str,
+    pub f: fn(&Map<String, Value>) -> Option<f64>,
 }
 
 /// Every paper. Registering one is one line here.
-pub static PAPERS: &[&Paper] = &[&lh93::PAPER];
+pub static PAPERS: &[&Paper] = &[&lh93::PAPER, &ep21::PAPER];
+
+/// The value of `x` at a point: the axis of that name, or a paper's
+/// quantity of that name computed from the point's axes.
+pub fn x_value(point: &Map<String, Value>, x: &str) -> Option<f64> {
+    if let Some(v) = point.get(x) {
+        return v.as_f64();
+    }
+    PAPERS
+        .iter()
+        .flat_map(|p| p.quantities)
+        .find(|q| q.name == x)
+        .and_then(|q| (q.f)(point))
+}
+
+/// The value that names a point's series along `axis` (an axis value, or
+/// a computed quantity as a number; null when neither is known).
+pub fn series_value(point: &Map<String, Value>, axis: &str) -> Value {
+    match point.get(axis) {
+        Some(v) => v.clone(),
+        None => x_value(point, axis).map_or(Value::Null, Value::from),
+    }
+}
 
 /// The paper of this key.
 pub fn find(key: &str) -> Option<&'static Paper> {
@@ -219,6 +254,25 @@ pub enum Layer {
         metric: &'static str,
         label: &'static str,
     },
+    /// A model fitted to the means of a metric along `x` (weighted by
+    /// their standard errors), one fit per value of `series`, over the
+    /// points `keep` accepts: the fitted curves and their constants.
+    Fit {
+        sweep: &'static str,
+        x: &'static str,
+        series: Option<&'static str>,
+        y: &'static str,
+        model: &'static Model,
+        start: &'static [f64],
+        label: &'static str,
+        keep: fn(&Point) -> bool,
+    },
+    /// Series and fits a paper computes from a sweep in its own way (fits
+    /// of fitted constants, say).
+    Computed {
+        sweep: &'static str,
+        f: fn(&SweepData) -> (Vec<SeriesData>, Vec<FitData>),
+    },
 }
 
 impl Layer {
@@ -228,7 +282,9 @@ impl Layer {
             Layer::Measured { sweep, .. }
             | Layer::AtPoints { sweep, .. }
             | Layer::Recorded { sweep, .. }
-            | Layer::Level { sweep, .. } => Some(sweep),
+            | Layer::Level { sweep, .. }
+            | Layer::Fit { sweep, .. }
+            | Layer::Computed { sweep, .. } => Some(sweep),
             Layer::Curve { .. } | Layer::Quoted { .. } => None,
         }
     }

@@ -1,7 +1,6 @@
-//! Elekes & Parteli (2021), *The angle of repose of cohesive grains under
-//! reduced and enhanced gravity*: the curves the paper fits to its heaps
-//! and packings, and the constants it quotes (`../shared/DESIGN.md` §2).
-//! Lengths are in µm, angles in degrees, g̃ = g / 9.81 m/s².
+//! The curves Elekes & Parteli fit to their heaps and packings, and the
+//! constants they quote (`../shared/DESIGN.md` §2). Lengths in µm, angles
+//! in degrees, g̃ = g / 9.81 m/s².
 
 use crate::fit::Model;
 
@@ -21,42 +20,42 @@ pub const PHI_C: f64 = 0.56;
 pub const D_PHI_UM: f64 = 103.0;
 
 /// Eq. 1: θ_r(d) = atan(μ_∞ (1 + D/d)), d in µm.
-pub const EQ1: Model = Model {
+pub static EQ1: Model = Model {
     name: "eq. 1",
     params: &["mu_inf", "D_um"],
     f: |d, p| (p[0] * (1.0 + p[1] / d)).atan().to_degrees(),
 };
 
 /// Eq. 1 with μ_∞ = 0.447 held, as the paper fits each gravity level.
-pub const EQ1_HELD: Model = Model {
+pub static EQ1_HELD: Model = Model {
     name: "eq. 1, μ_∞ held at 0.447",
     params: &["D_um"],
     f: |d, p| (MU_INF * (1.0 + p[0] / d)).atan().to_degrees(),
 };
 
 /// Eq. 2: D(g̃) = D₀ g̃^(−α).
-pub const EQ2: Model = Model {
+pub static EQ2: Model = Model {
     name: "eq. 2",
     params: &["D0_um", "alpha"],
     f: |g, p| p[0] * g.powf(-p[1]),
 };
 
 /// Eq. 2 with the exponent held at 1/2: D(g̃) = D_E / √g̃.
-pub const EQ2_HALF: Model = Model {
+pub static EQ2_HALF: Model = Model {
     name: "eq. 2, exponent held at 1/2",
     params: &["D_um"],
     f: |g, p| p[0] / g.sqrt(),
 };
 
 /// Eq. 4: θ_r(Bo) = atan(μ_∞ (1 + β √Bo)).
-pub const EQ4: Model = Model {
+pub static EQ4: Model = Model {
     name: "eq. 4",
     params: &["mu_inf", "beta"],
     f: |bo, p| (p[0] * (1.0 + p[1] * bo.sqrt())).atan().to_degrees(),
 };
 
 /// The packing fit: φ(x) = φ_∞ (1 − C exp(−x / D_φ)), x = d √g̃ in µm.
-pub const PACKING: Model = Model {
+pub static PACKING: Model = Model {
     name: "packing fit",
     params: &["phi_inf", "C", "D_phi_um"],
     f: |x, p| p[0] * (1.0 - p[1] * (-x / p[2]).exp()),

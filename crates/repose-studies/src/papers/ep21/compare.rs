@@ -1,0 +1,257 @@
+//! The paper's fitted constants and statements against ours: each fit
+//! made again on our means, with its 95 % interval; a constant agrees
+//! when the paper's value lies inside our interval.
+
+use super::curves::{
+    ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ2_HALF, EQ4, MU_INF, MU_INF_BOND,
+    PACKING, PHI_C, PHI_INF,
+};
+use super::figures::d_by_gravity;
+use crate::compare::{weighted_slope, Comparison};
+use crate::data::{same, StudyData, SweepData};
+use crate::fit::{fit, Datum, Fit, Param};
+use crate::fitted::Along;
+use repose_store::{Aggregate, Point};
+use serde_json::Value;
+
+const FIT_DIFFERS: &str =
+    "the paper's value lies outside our 95 % interval: see the fidelity section (softened stiffness, heap size)";
+
+pub fn compare(data: &StudyData) -> Vec<Comparison> {
+    let mut rows = Vec::new();
+    if let Some(heaps) = data.get("heaps") {
+        rows.extend(eq1_rows(heaps));
+        rows.extend(eq2_rows(heaps));
+        rows.extend(eq4_rows(heaps));
+    }
+    if let Some(dry) = data.get("dry") {
+        rows.extend(dry_rows(dry));
+    }
+    if let Some(packing) = data.get("packing") {
+        rows.extend(packing_rows(packing));
+    }
+    rows
+}
+
+fn every(_: &Point) -> bool {
+    true
+}
+
+/// One row per constant of a fit (or a "no result" row per constant
+/// when the fit failed), against the paper's values.
+fn fit_rows(
+    what: &str,
+    result: Result<Fit, String>,
+    paper: &[(&str, &str, f64, &str)],
+) -> Vec<Comparison> {
+    paper
+        .iter()
+        .map(|(name, symbol, value, unit)| {
+            let quantity = format!("{symbol} ({what})");
+            match &result {
+                Ok(f) => match f.param(name) {
+                    Some(p) => param_row(quantity, *value, unit, p, f.points),
+                    None => missing(quantity, *value, unit, "not a constant of the fit"),
+                },
+                Err(e) => missing(quantity, *value, unit, e),
+            }
+        })
+        .collect()
+}
+
+fn missing(quantity: String, paper: f64, unit: &str, why: &str) -> Comparison {
+    Comparison::statement(
+        quantity,
+        format!("{paper} {unit}"),
+        None,
+        None,
+        false,
+        why.to_string(),
+    )
+    .with_verdict("no result")
+}
+
+fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize) -> Comparison {
+    let ours = Aggregate {
+        n: i64::try_from(points).unwrap_or(i64::MAX),
+        mean: Some(p.value),
+        sd: None,
+        sem: Some(p.se),
+    };
+    let sigma = (p.se > 0.0).then(|| (p.value - paper) / p.se);
+    let inside = p.lo <= paper && paper <= p.hi;
+    Comparison::statement(
+        quantity,
+        format!("{paper} {unit}"),
+        Some(ours),
+        sigma,
+        inside,
+        format!(
+            "ours {:.4} ± {:.4} {unit}, 95 % interval [{:.4}, {:.4}]{}",
+            p.value,
+            p.se,
+            p.lo,
+            p.hi,
+            if inside {
+                String::new()
+            } else {
+                format!("; {FIT_DIFFERS}")
+            }
+        ),
+    )
+}
+
+fn earth(d: &SweepData) -> Vec<Datum> {
+    let mut on_earth = d.clone();
+    on_earth.points.retain(|p| {
+        same(
+            Some(&Value::from(super::g_tilde(&p.point).unwrap_or(0.0))),
+            1.0,
+        )
+    });
+    let along = Along {
+        x: "ep21.d_um",
+        by: None,
+        y: "theta_r",
+        keep: every,
+    };
+    along
+        .groups(&on_earth)
+        .pop()
+        .map(|g| g.1)
+        .unwrap_or_default()
+}
+
+fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
+    let result = fit(&EQ1, &earth(heaps), &[0.45, 80.0]).map_err(|e| e.to_string());
+    fit_rows(
+        "eq. 1 on Earth",
+        result,
+        &[
+            ("mu_inf", "μ_∞", MU_INF, ""),
+            ("D_um", "D_E", D_EARTH_UM, "µm"),
+        ],
+    )
+}
+
+fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
+    let data: Vec<Datum> = d_by_gravity(heaps)
+        .into_iter()
+        .filter_map(|(g, f)| {
+            let (v, se) = f.ok()?;
+            Some(Datum {
+                x: g,
+                y: v,
+                sigma: (se > 0.0).then_some(se),
+            })
+        })
+        .collect();
+    let data: Vec<Datum> = if data.iter().any(|d| d.sigma.is_none()) {
+        data.into_iter()
+            .map(|d| Datum { sigma: None, ..d })
+            .collect()
+    } else {
+        data
+    };
+    let free = fit(&EQ2, &data, &[80.0, 0.5]).map_err(|e| e.to_string());
+    let half = fit(&EQ2_HALF, &data, &[80.0]).map_err(|e| e.to_string());
+    let mut rows = fit_rows(
+        "eq. 2, D = D₀ g̃^−α",
+        free,
+        &[("D0_um", "D₀", D0_UM, "µm"), ("alpha", "α", ALPHA, "")],
+    );
+    rows.extend(fit_rows(
+        "eq. 2 with α = ½",
+        half,
+        &[("D_um", "D_E", D_EARTH_UM, "µm")],
+    ));
+    rows
+}
+
+fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
+    let along = Along {
+        x: "ep21.bond",
+        by: None,
+        y: "theta_r",
+        keep: every,
+    };
+    let data = along.groups(heaps).pop().map(|g| g.1).unwrap_or_default();
+    let result = fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string());
+    fit_rows(
+        "eq. 4",
+        result,
+        &[("mu_inf", "μ_∞", MU_INF_BOND, ""), ("beta", "β", BETA, "")],
+    )
+}
+
+/// θ_r,nc: its level (the paper's "about 24°", read as 24° ± 1°) and its
+/// rise with g (about 10 % from g̃ = 0.06 to 100, read as ± 5 %), from a
+/// weighted straight line in log g̃.
+fn dry_rows(dry: &SweepData) -> Vec<Comparison> {
+    let along: Vec<(f64, Aggregate)> = dry.along("ep21.g_tilde", None, "theta_r");
+    let means: Vec<f64> = along.iter().filter_map(|(_, a)| a.mean).collect();
+    let level = (!means.is_empty()).then(|| {
+        let n = means.len() as f64;
+        let mean = means.iter().sum::<f64>() / n;
+        let sem = (along
+            .iter()
+            .map(|(_, a)| a.sem.unwrap_or(0.0).powi(2))
+            .sum::<f64>())
+        .sqrt()
+            / n;
+        Aggregate {
+            n: along.iter().map(|(_, a)| a.n).sum(),
+            mean: Some(mean),
+            sd: None,
+            sem: Some(sem),
+        }
+    });
+    let mut rows = vec![Comparison::quoted(
+        "θ_r,nc, mean over the gravity levels (°)".into(),
+        (24.0, 1.0, 1.0),
+        level,
+        "our heaps without cohesion stand at another angle than the paper's",
+    )];
+    let logged: Vec<(f64, Aggregate)> = along.iter().map(|(g, a)| (g.log10(), *a)).collect();
+    let rise =
+        weighted_slope(&logged)
+            .zip(level.and_then(|l| l.mean))
+            .map(|((slope, se), mean)| {
+                // Over log10(100 / 0.063) = 3.2 decades, relative to the level.
+                let decades = (100.0f64 / 0.063).log10();
+                (slope * decades / mean, se * decades / mean)
+            });
+    let ours = rise.map(|(r, se)| Aggregate {
+        n: logged.len() as i64,
+        mean: Some(100.0 * r),
+        sd: None,
+        sem: Some(100.0 * se),
+    });
+    rows.push(Comparison::quoted(
+        "rise of θ_r,nc from g̃ = 0.063 to 100 (%)".into(),
+        (10.0, 5.0, 1.0),
+        ours,
+        "our heaps without cohesion change with g otherwise than the paper's",
+    ));
+    rows
+}
+
+fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
+    let along = Along {
+        x: "ep21.d_sqrt_g_um",
+        by: None,
+        y: "packing_fraction",
+        keep: every,
+    };
+    let data = along.groups(packing).pop().map(|g| g.1).unwrap_or_default();
+    let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
+    fit_rows(
+        "packing fit",
+        result,
+        &[
+            ("phi_inf", "φ_∞", PHI_INF, ""),
+            ("C", "C", PHI_C, ""),
+            ("D_phi_um", "D_φ", D_PHI_UM, "µm"),
+        ],
+    )
+}

@@ -1,0 +1,357 @@
+//! The paper's figures 2–5 and the regime boundary, with its fits made
+//! again on our heaps and packings.
+
+use super::curves::{
+    ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ1_HELD, EQ2, EQ2_HALF, EQ4, MU_INF,
+    MU_INF_BOND, PACKING, PHI_C, PHI_INF,
+};
+use super::{BOND_REGIME_I, DENSITY, G_EARTH, SURFACE_ENERGY};
+use crate::data::{same, SweepData};
+use crate::figure::{measured, FitData, Kind, PlotPoint, SeriesData};
+use crate::fit::Datum;
+use crate::fitted::{fitted, Along};
+use crate::papers::{Figure, Layer};
+use repose_store::Point;
+use serde_json::Value;
+
+const THETA: &[&str] = &["theta_r"];
+const THETA_LABEL: &str = "θ_r (°)";
+const D: &str = "ep21.d_um";
+const G: &str = "ep21.g_tilde";
+const D_LABEL: &str = "grain diameter d (µm)";
+const REGIME_I: &str = "regime I (Bo > 10⁴): an irregular heap";
+
+pub fn figures() -> Vec<Figure> {
+    vec![fig2(), fig3a(), fig3b(), fig3c(), fig4(), fig5(), regime()]
+}
+
+fn every(_: &Point) -> bool {
+    true
+}
+
+fn eq1(d: f64) -> f64 {
+    (EQ1.f)(d, &[MU_INF, D_EARTH_UM])
+}
+
+/// Bo of a grain of `d_um` µm at g̃.
+fn bond_at(d_um: f64, g_tilde: f64) -> f64 {
+    let d = d_um * 1e-6;
+    12.0 * SURFACE_ENERGY / (d * d * g_tilde * G_EARTH * DENSITY)
+}
+
+/// Marks the points in regime I, given each point's Bond number from its
+/// x and its series value.
+fn flag_regime(series: &mut [SeriesData], bo: impl Fn(f64, Option<&Value>) -> Option<f64>) {
+    for s in series {
+        let value = s.series_value.clone();
+        for p in &mut s.points {
+            if bo(p.x, value.as_ref()).is_some_and(|b| b > BOND_REGIME_I) {
+                p.flag = Some(REGIME_I.into());
+            }
+        }
+    }
+}
+
+/// The sweep's points at Earth's gravity only.
+fn on_earth(d: &SweepData) -> SweepData {
+    let mut earth = d.clone();
+    earth.points.retain(|p| {
+        same(
+            Some(&Value::from(super::g_tilde(&p.point).unwrap_or(0.0))),
+            1.0,
+        )
+    });
+    earth
+}
+
+/// Fig. 2: θ_r against d on Earth, eq. 1 fitted with both constants free.
+fn earth_heaps(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
+    let earth = on_earth(d);
+    let mut series = measured(&earth, D, None, THETA, "ours, g̃ = 1");
+    flag_regime(&mut series, |x, _| Some(bond_at(x, 1.0)));
+    let along = Along {
+        x: D,
+        by: None,
+        y: "theta_r",
+        keep: every,
+    };
+    let data = along.groups(&earth).pop().map(|g| g.1).unwrap_or_default();
+    let fit = fitted(
+        &EQ1,
+        &[0.45, 80.0],
+        "eq. 1 fitted",
+        None,
+        &data,
+        true,
+        &mut series,
+    );
+    (series, vec![fit])
+}
+
+fn fig2() -> Figure {
+    Figure {
+        key: "2",
+        title: "θ_r against the grain size d on Earth",
+        caption: "Cohesive glass heaps on Earth: θ_r against d with eq. 1 fitted to our means (both constants free) and eq. 1 with the paper's constants. Points in regime I (Bo > 10⁴) are marked.",
+        x_label: D_LABEL,
+        y_label: THETA_LABEL,
+        log_x: true,
+        layers: vec![
+            Layer::Computed {
+                sweep: "heaps",
+                f: earth_heaps,
+            },
+            Layer::Curve {
+                label: "eq. 1, paper (μ_∞ = 0.447, D = 87 µm)",
+                f: |d| Some(eq1(d)),
+            },
+        ],
+    }
+}
+
+/// θ_r of the heaps along `x`, one series per gravity, regime I marked.
+fn heaps_along(d: &SweepData, x: &'static str) -> Vec<SeriesData> {
+    let mut series = measured(d, x, Some(G), THETA, "g̃");
+    let on_bond = x == "ep21.bond";
+    flag_regime(&mut series, |x, g| {
+        if on_bond {
+            Some(x)
+        } else {
+            Some(bond_at(x, g?.as_f64()?))
+        }
+    });
+    series
+}
+
+fn fig3a() -> Figure {
+    Figure {
+        key: "3a",
+        title: "θ_r against d at six gravity levels",
+        caption: "Cohesive glass heaps from Pluto's gravity (g̃ = 0.063) to 100 g: θ_r against d, with eq. 1 fitted at each level (μ_∞ held at 0.447, as the paper fits them).",
+        x_label: D_LABEL,
+        y_label: THETA_LABEL,
+        log_x: true,
+        layers: vec![
+            Layer::Computed {
+                sweep: "heaps",
+                f: |d| (heaps_along(d, D), Vec::new()),
+            },
+            Layer::Fit {
+                sweep: "heaps",
+                x: D,
+                series: Some(G),
+                y: "theta_r",
+                model: &EQ1_HELD,
+                start: &[80.0],
+                label: "eq. 1 (μ_∞ = 0.447)",
+                keep: every,
+            },
+        ],
+    }
+}
+
+fn fig3b() -> Figure {
+    Figure {
+        key: "3b",
+        title: "θ_r of heaps without cohesion against g",
+        caption: "Heaps of 1 mm beads without surface energy: θ_r,nc against g̃. The paper finds about 24°, rising by about 10 % from g̃ = 0.06 to 100.",
+        x_label: "gravity g̃ = g / 9.81 m/s²",
+        y_label: THETA_LABEL,
+        log_x: true,
+        layers: vec![
+            Layer::Measured {
+                sweep: "dry",
+                x: G,
+                series: None,
+                y: THETA,
+                label: "ours, no cohesion",
+            },
+            Layer::Curve {
+                label: "paper: θ_r,nc ≈ 24°",
+                f: |_| Some(24.0),
+            },
+        ],
+    }
+}
+
+/// D and its standard error at one gravity level, or why it has none.
+pub type FittedD = Result<(f64, f64), String>;
+
+/// D fitted at each gravity level (eq. 1, μ_∞ held), with its standard
+/// error: the data of fig. 3C.
+pub fn d_by_gravity(d: &SweepData) -> Vec<(f64, FittedD)> {
+    let along = Along {
+        x: D,
+        by: Some(G),
+        y: "theta_r",
+        keep: every,
+    };
+    along
+        .groups(d)
+        .into_iter()
+        .filter_map(|(g, data)| {
+            let g = g?.as_f64()?;
+            let fit = crate::fit::fit(&EQ1_HELD, &data, &[80.0])
+                .map(|f| (f.params[0].value, f.params[0].se))
+                .map_err(|e| e.to_string());
+            Some((g, fit))
+        })
+        .collect()
+}
+
+/// Fig. 3C: D against g̃ with eq. 2 fitted free and with the exponent ½.
+fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
+    let found = d_by_gravity(d);
+    let points: Vec<PlotPoint> = found
+        .iter()
+        .filter_map(|(g, f)| {
+            let (v, se) = f.as_ref().ok()?;
+            Some(PlotPoint {
+                sem: Some(*se),
+                sd: Some(*se),
+                ..PlotPoint::value(*g, *v)
+            })
+        })
+        .collect();
+    let data: Vec<Datum> = points
+        .iter()
+        .filter_map(|p| {
+            Some(Datum {
+                x: p.x,
+                y: p.y?,
+                sigma: p.sem.filter(|s| *s > 0.0),
+            })
+        })
+        .collect();
+    let mut series = vec![SeriesData {
+        name: "D fitted at each g̃ (eq. 1, μ_∞ = 0.447)".into(),
+        kind: Kind::Measured,
+        series_value: None,
+        points,
+        band: None,
+    }];
+    let free = fitted(
+        &EQ2,
+        &[80.0, 0.5],
+        "eq. 2 fitted",
+        None,
+        &data,
+        true,
+        &mut series,
+    );
+    let half = fitted(
+        &EQ2_HALF,
+        &[80.0],
+        "eq. 2 fitted, exponent ½",
+        None,
+        &data,
+        true,
+        &mut series,
+    );
+    (series, vec![free, half])
+}
+
+fn fig3c() -> Figure {
+    Figure {
+        key: "3c",
+        title: "the length D of eq. 1 against g",
+        caption: "D fitted at each gravity level against g̃, with eq. 2 fitted (prefactor and exponent free, and exponent held at ½) and the paper's D = 87 µm / √g̃.",
+        x_label: "gravity g̃ = g / 9.81 m/s²",
+        y_label: "D (µm)",
+        log_x: true,
+        layers: vec![
+            Layer::Computed {
+                sweep: "heaps",
+                f: d_against_g,
+            },
+            Layer::Curve {
+                label: "eq. 2, paper (D₀ = 76 µm, exponent 0.454)",
+                f: |g| Some((EQ2.f)(g, &[D0_UM, ALPHA])),
+            },
+        ],
+    }
+}
+
+fn fig4() -> Figure {
+    Figure {
+        key: "4",
+        title: "θ_r against the Bond number",
+        caption: "Every cohesive heap against Bo = 12γ/(d²gρ) (the paper's factor 12), with eq. 4 fitted to our means and with the paper's constants. Regime I (Bo > 10⁴) marked.",
+        x_label: "Bond number Bo",
+        y_label: THETA_LABEL,
+        log_x: true,
+        layers: vec![
+            Layer::Computed {
+                sweep: "heaps",
+                f: |d| (heaps_along(d, "ep21.bond"), Vec::new()),
+            },
+            Layer::Fit {
+                sweep: "heaps",
+                x: "ep21.bond",
+                series: None,
+                y: "theta_r",
+                model: &EQ4,
+                start: &[0.45, 0.02],
+                label: "eq. 4 fitted",
+                keep: every,
+            },
+            Layer::Curve {
+                label: "eq. 4, paper (μ_∞ = 0.458, β = 0.014)",
+                f: |bo| Some((EQ4.f)(bo, &[MU_INF_BOND, BETA])),
+            },
+        ],
+    }
+}
+
+fn fig5() -> Figure {
+    Figure {
+        key: "5",
+        title: "packing fraction against d√g̃",
+        caption: "Packing fraction of the poured columns against d√g̃ with the paper's exponential fitted to our values and with its constants.",
+        x_label: "d √g̃ (µm)",
+        y_label: "packing fraction φ",
+        log_x: true,
+        layers: vec![
+            Layer::Measured {
+                sweep: "packing",
+                x: "ep21.d_sqrt_g_um",
+                series: None,
+                y: &["packing_fraction"],
+                label: "ours",
+            },
+            Layer::Fit {
+                sweep: "packing",
+                x: "ep21.d_sqrt_g_um",
+                series: None,
+                y: "packing_fraction",
+                model: &PACKING,
+                start: &[0.6, 0.5, 100.0],
+                label: "packing fit",
+                keep: every,
+            },
+            Layer::Curve {
+                label: "paper (φ_∞ = 0.57, C = 0.56, D_φ = 103 µm)",
+                f: |x| Some((PACKING.f)(x, &[PHI_INF, PHI_C, D_PHI_UM])),
+            },
+        ],
+    }
+}
+
+fn regime() -> Figure {
+    Figure {
+        key: "regime",
+        title: "irregularity of the heaps against d and g",
+        caption: "The rms distance of the heaps' outlines from their fitted triangles against d, one series per g̃. The paper sees irregular heaps below d_c ≈ 50 µm/√g̃ (Bo ≈ 10⁴), and no heap below about d_c/2; points with Bo > 10⁴ are marked, and points where no heap formed count as failures.",
+        x_label: D_LABEL,
+        y_label: "surface roughness (d)",
+        log_x: true,
+        layers: vec![Layer::Computed {
+            sweep: "heaps",
+            f: |d| {
+                let mut s = measured(d, D, Some(G), &["surface_roughness"], "g̃");
+                flag_regime(&mut s, |x, g| Some(bond_at(x, g?.as_f64()?)));
+                (s, Vec::new())
+            },
+        }],
+    }
+}

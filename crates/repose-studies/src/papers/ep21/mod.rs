@@ -1,0 +1,195 @@
+//! Elekes & Parteli (2021), *The angle of repose of cohesive grains under
+//! reduced and enhanced gravity*: poured heaps of glass beads over grain
+//! size d and gravity g (figures 2–4, the regime boundary), heaps without
+//! cohesion over g (fig. 3B) and packed columns (fig. 5), with the paper's
+//! fits made again on our data.
+//!
+//! The study's heaps are smaller than the paper's (a 20 d plate and 2000
+//! grains poured, against 40 d and 25 000): `docs/tradeoff-heap.md`
+//! measures what heap size and softened stiffness cost in θ_r.
+
+pub mod compare;
+pub mod curves;
+pub mod figures;
+
+use super::{Paper, Quantity, Reduced, StudySweep};
+use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+
+pub static PAPER: Paper = Paper {
+    key: "ep21",
+    title: "Elekes & Parteli (2021): the angle of repose of cohesive grains under reduced and enhanced gravity",
+    citation: "F. Elekes and E. J. R. Parteli, Proc. Natl. Acad. Sci. USA 118, e2107965118 (2021)",
+    sweeps,
+    figures: figures::figures,
+    compare: compare::compare,
+    quantities: &QUANTITIES,
+};
+
+/// Earth's gravity, m/s²: g̃ = g / G_EARTH.
+pub const G_EARTH: f64 = 9.81;
+/// The gravity levels of the paper by g̃: Pluto, Moon, Mars, Earth, 10 g, 100 g.
+pub const GRAVITIES: [f64; 6] = [0.063, 0.165, 0.378, 1.0, 10.0, 100.0];
+/// Glass (Table 1): density and surface energy, the values of every
+/// study sweep's base (the Bond number is computed with them).
+pub const DENSITY: f64 = 2500.0;
+pub const SURFACE_ENERGY: f64 = 0.05;
+/// Grain sizes of the heaps, µm.
+const SIZES_UM: [f64; 8] = [25.0, 40.0, 60.0, 100.0, 160.0, 250.0, 500.0, 1000.0];
+/// Grain sizes of the packings, µm.
+const PACKING_SIZES_UM: [f64; 5] = [25.0, 50.0, 100.0, 200.0, 400.0];
+/// The Bond number above which the paper sees irregular heaps (regime I).
+pub const BOND_REGIME_I: f64 = 1e4;
+
+static QUANTITIES: [Quantity; 4] = [
+    Quantity {
+        name: "ep21.d_um",
+        f: d_um,
+    },
+    Quantity {
+        name: "ep21.g_tilde",
+        f: g_tilde,
+    },
+    Quantity {
+        name: "ep21.bond",
+        f: bond,
+    },
+    Quantity {
+        name: "ep21.d_sqrt_g_um",
+        f: |p| Some(d_um(p)? * g_tilde(p)?.sqrt()),
+    },
+];
+
+/// The grain diameter of a point, µm.
+pub fn d_um(point: &Map<String, Value>) -> Option<f64> {
+    Some(point.get("grains.diameter")?.as_f64()? * 1e6)
+}
+
+/// The gravity of a point in Earth's: g̃ = |g| / 9.81 m/s².
+pub fn g_tilde(point: &Map<String, Value>) -> Option<f64> {
+    let g = point.get("gravity")?.as_array()?;
+    let g2: f64 = g
+        .iter()
+        .map(|c| c.as_f64().map(|c| c * c))
+        .sum::<Option<f64>>()?;
+    Some(g2.sqrt() / G_EARTH)
+}
+
+/// The Bond number of a point, Bo = 12 γ / (d² g ρ), with the paper's
+/// factor 12 (the pair force πγd against the weight is half of it).
+pub fn bond(point: &Map<String, Value>) -> Option<f64> {
+    let d = point.get("grains.diameter")?.as_f64()?;
+    let g = g_tilde(point)? * G_EARTH;
+    Some(12.0 * SURFACE_ENERGY / (d * d * g * DENSITY))
+}
+
+/// The gravity vector of g̃.
+fn gravity(g_tilde: f64) -> Value {
+    json!([0.0, 0.0, -(g_tilde * G_EARTH)])
+}
+
+fn values(list: impl IntoIterator<Item = Value>) -> Vec<Value> {
+    list.into_iter().collect()
+}
+
+fn diameters(um: &[f64]) -> Vec<Value> {
+    values(um.iter().map(|d| json!(d * 1e-6)))
+}
+
+fn gravities(levels: &[f64]) -> Vec<Value> {
+    values(levels.iter().map(|g| gravity(*g)))
+}
+
+/// Glass beads (Table 1), with or without their surface energy.
+fn glass(surface_energy: f64) -> Value {
+    json!({
+        "grains": {"density": DENSITY},
+        "material": {"surface_energy": surface_energy, "friction": 0.5, "rolling_friction": 0.05},
+    })
+}
+
+/// The study's heap: a 20 d plate, 2000 grains poured.
+fn heap_base(surface_energy: f64, plate: f64, grains: u32) -> Value {
+    let mut base = glass(surface_energy);
+    base["heap"] = json!({"plate": plate, "max_grains": grains});
+    base
+}
+
+fn axes(list: Vec<(&str, Vec<Value>)>) -> BTreeMap<String, Vec<Value>> {
+    list.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+}
+
+fn sweeps() -> Vec<StudySweep> {
+    vec![
+        StudySweep {
+            key: "heaps",
+            title: "cohesive heaps of glass beads: θ_r over d × g (figures 2, 3A, 3C, 4)",
+            protocol: "heap",
+            base: heap_base(SURFACE_ENERGY, 20.0, 2000),
+            axes: axes(vec![
+                ("grains.diameter", diameters(&SIZES_UM)),
+                ("gravity", gravities(&GRAVITIES)),
+            ]),
+            samples: 2,
+            priority: 0,
+            reduced: Reduced {
+                base: heap_base(SURFACE_ENERGY, 10.0, 250),
+                axes: axes(vec![
+                    ("grains.diameter", diameters(&[100.0, 250.0, 1000.0])),
+                    ("gravity", gravities(&[0.165, 1.0])),
+                ]),
+                samples: 1,
+            },
+        },
+        StudySweep {
+            key: "dry",
+            title: "heaps without cohesion: θ_r,nc over g (fig. 3B)",
+            protocol: "heap",
+            base: {
+                let mut b = heap_base(0.0, 20.0, 2000);
+                b["grains"]["diameter"] = json!(1e-3);
+                b
+            },
+            axes: axes(vec![("gravity", gravities(&GRAVITIES))]),
+            samples: 3,
+            priority: 0,
+            reduced: Reduced {
+                base: {
+                    let mut b = heap_base(0.0, 10.0, 250);
+                    b["grains"]["diameter"] = json!(1e-3);
+                    b
+                },
+                axes: axes(vec![("gravity", gravities(&[0.165, 10.0]))]),
+                samples: 1,
+            },
+        },
+        StudySweep {
+            key: "packing",
+            title: "packed columns: φ over d × g (fig. 5)",
+            protocol: "packing",
+            base: {
+                let mut b = glass(SURFACE_ENERGY);
+                b["packing"] = json!({"width": 8.0, "height": 40.0});
+                b
+            },
+            axes: axes(vec![
+                ("grains.diameter", diameters(&PACKING_SIZES_UM)),
+                ("gravity", gravities(&[0.165, 1.0, 10.0])),
+            ]),
+            samples: 1,
+            priority: 0,
+            reduced: Reduced {
+                base: {
+                    let mut b = glass(SURFACE_ENERGY);
+                    b["packing"] = json!({"width": 5.0, "height": 12.0});
+                    b
+                },
+                axes: axes(vec![
+                    ("grains.diameter", diameters(&[50.0, 400.0])),
+                    ("gravity", gravities(&[1.0])),
+                ]),
+                samples: 1,
+            },
+        },
+    ]
+}

@@ -1,0 +1,218 @@
+//! The second paper's figures and comparison on data made from its own
+//! curves: every fit gives back the paper's constants within its interval
+//! (so every verdict agrees), the regime I points are marked, and data
+//! made from other constants is judged to differ.
+
+use repose_store::{Aggregate, Point};
+use repose_studies::data::{StudyData, SweepData};
+use repose_studies::figure::Kind;
+use repose_studies::papers::ep21::{self, curves, GRAVITIES};
+use serde_json::{json, Map, Value};
+
+/// A point with its axis values and one metric's statistics.
+fn point(axes: Value, metric: &str, mean: f64, sem: f64) -> Point {
+    let mut metrics = std::collections::BTreeMap::new();
+    metrics.insert(
+        metric.to_string(),
+        Aggregate {
+            n: 4,
+            mean: Some(mean),
+            sd: Some(2.0 * sem),
+            sem: Some(sem),
+        },
+    );
+    Point {
+        point: axes.as_object().cloned().unwrap_or_else(Map::new),
+        samples: 4,
+        failures: 0,
+        metrics,
+    }
+}
+
+fn sweep(points: Vec<Point>) -> SweepData {
+    SweepData {
+        id: "synthetic".into(),
+        points,
+        samples: Vec::new(),
+        report: None,
+    }
+}
+
+/// A zero-mean wobble, so that the fits are not exact.
+fn wobble(k: usize, size: f64) -> f64 {
+    size * [1.0, -0.6, 0.3, -0.8, 0.5, -0.2][k % 6]
+}
+
+fn gravity(g: f64) -> Value {
+    json!([0.0, 0.0, -(g * ep21::G_EARTH)])
+}
+
+/// Heaps whose θ_r follows eq. 1 with D = D_E / g̃^α at every gravity.
+fn heaps(mu: f64, d_earth: f64, alpha: f64) -> SweepData {
+    let sizes = [25.0, 40.0, 60.0, 100.0, 160.0, 250.0, 500.0, 1000.0];
+    let mut points = Vec::new();
+    for (k, g) in GRAVITIES.iter().enumerate() {
+        for (j, d) in sizes.iter().enumerate() {
+            let big_d = d_earth * g.powf(-alpha);
+            let theta = (curves::EQ1.f)(*d, &[mu, big_d]) + wobble(k + j, 0.15);
+            let axes = json!({"grains.diameter": d * 1e-6, "gravity": gravity(*g)});
+            points.push(point(axes, "theta_r", theta, 0.3));
+        }
+    }
+    sweep(points)
+}
+
+fn dry(level: f64, rise: f64) -> SweepData {
+    let lo = 0.063f64.log10();
+    let span = (100.0f64 / 0.063).log10();
+    let points = GRAVITIES
+        .iter()
+        .enumerate()
+        .map(|(k, g)| {
+            let theta = level * (1.0 + rise * ((g.log10() - lo) / span - 0.5));
+            point(
+                json!({"gravity": gravity(*g)}),
+                "theta_r",
+                theta + wobble(k, 0.05),
+                0.2,
+            )
+        })
+        .collect();
+    sweep(points)
+}
+
+fn packing() -> SweepData {
+    let p = [curves::PHI_INF, curves::PHI_C, curves::D_PHI_UM];
+    let mut points = Vec::new();
+    for (k, g) in [0.165f64, 1.0, 10.0].iter().enumerate() {
+        for (j, d) in [25.0f64, 50.0, 100.0, 200.0, 400.0].iter().enumerate() {
+            let phi = (curves::PACKING.f)(d * g.sqrt(), &p) + wobble(k + j, 0.002);
+            let axes = json!({"grains.diameter": d * 1e-6, "gravity": gravity(*g)});
+            points.push(point(axes, "packing_fraction", phi, 0.004));
+        }
+    }
+    sweep(points)
+}
+
+fn study(heaps: SweepData) -> StudyData {
+    let mut s = StudyData::default();
+    s.sweeps.insert("heaps".into(), heaps);
+    s.sweeps.insert("dry".into(), dry(24.0, 0.10));
+    s.sweeps.insert("packing".into(), packing());
+    s
+}
+
+#[test]
+fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
+    let data = study(heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5));
+    let rows = (ep21::PAPER.compare)(&data);
+    for r in &rows {
+        println!(
+            "{:45} {:12} {:8} {}",
+            r.quantity, r.paper, r.verdict, r.reason
+        );
+    }
+    // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), θ_r,nc (2), packing (3).
+    assert_eq!(rows.len(), 12);
+    let judged: Vec<&str> = rows.iter().map(|r| r.verdict.as_str()).collect();
+    // Data made with α = ½ and eq. 1's μ_∞: eq. 4's constants and the free
+    // exponent of eq. 2 are fits of another form, judged on their own.
+    for (r, v) in rows.iter().zip(&judged) {
+        if r.quantity.contains("eq. 1") || r.quantity.contains("α = ½") {
+            assert_eq!(*v, "agrees", "{r:?}");
+        }
+        if r.quantity.contains("packing") || r.quantity.contains("θ_r,nc") {
+            assert_eq!(*v, "agrees", "{r:?}");
+        }
+    }
+}
+
+#[test]
+fn constants_far_from_the_papers_are_judged_to_differ() {
+    let data = study(heaps(0.6, 200.0, 0.5));
+    let rows = (ep21::PAPER.compare)(&data);
+    let row = |q: &str| rows.iter().find(|r| r.quantity.starts_with(q)).unwrap();
+    assert_eq!(row("μ_∞ (eq. 1").verdict, "differs");
+    assert_eq!(row("D_E (eq. 1").verdict, "differs");
+    let mu = row("μ_∞ (eq. 1").ours.unwrap().mean.unwrap();
+    assert!((mu - 0.6).abs() < 0.01, "{mu}");
+}
+
+#[test]
+fn the_figures_draw_the_fits_and_mark_regime_one() {
+    let data = study(heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5));
+    let figure = |key: &str| ep21::PAPER.figure(key).unwrap().data("ep21", &data);
+
+    let f2 = figure("2");
+    let fit = f2.fits[0].fit.as_ref().expect("eq. 1 fitted on Earth");
+    let d = fit.param("D_um").unwrap();
+    assert!(
+        d.lo < curves::D_EARTH_UM && curves::D_EARTH_UM < d.hi,
+        "{d:?}"
+    );
+    let ours = f2.series.iter().find(|s| s.kind == Kind::Measured).unwrap();
+    // Bo > 10⁴ below about 50 µm on Earth: 25 and 40 µm are marked.
+    let marked: Vec<f64> = ours
+        .points
+        .iter()
+        .filter(|p| p.flag.is_some())
+        .map(|p| p.x.round())
+        .collect();
+    assert_eq!(marked, vec![25.0, 40.0]);
+    assert!(f2.series.iter().any(|s| s.kind == Kind::Fit));
+
+    let f3a = figure("3a");
+    assert_eq!(
+        f3a.series
+            .iter()
+            .filter(|s| s.kind == Kind::Measured)
+            .count(),
+        6
+    );
+    assert_eq!(f3a.fits.len(), 6);
+    for (f, g) in f3a.fits.iter().zip(GRAVITIES) {
+        let d = f.fit.as_ref().unwrap().params[0].value;
+        let want = curves::D_EARTH_UM / g.sqrt();
+        assert!(
+            (d - want).abs() < 0.05 * want,
+            "g̃ = {g}: D = {d}, want {want}"
+        );
+    }
+
+    let f3c = figure("3c");
+    let half = f3c.fits.iter().find(|f| f.label.contains("½")).unwrap();
+    let de = half.fit.as_ref().unwrap().params[0].value;
+    assert!((de - curves::D_EARTH_UM).abs() < 3.0, "{de}");
+    let free = f3c.fits.iter().find(|f| f.label == "eq. 2 fitted").unwrap();
+    let alpha = free.fit.as_ref().unwrap().param("alpha").unwrap();
+    assert!(alpha.lo < 0.5 && 0.5 < alpha.hi, "{alpha:?}");
+
+    let f4 = figure("4");
+    assert!(f4.series.iter().any(
+        |s| s.kind == Kind::Measured && s.points.iter().any(|p| p.x > 1e4 && p.flag.is_some())
+    ));
+    assert!(f4.fits[0].fit.is_some());
+
+    let f5 = figure("5");
+    let phi = f5.fits[0]
+        .fit
+        .as_ref()
+        .unwrap()
+        .param("phi_inf")
+        .unwrap()
+        .value;
+    assert!((phi - curves::PHI_INF).abs() < 0.01, "{phi}");
+    assert!(figure("3b").series.iter().any(|s| s.kind == Kind::Measured));
+    assert!(!figure("regime").series.is_empty());
+}
+
+#[test]
+fn missing_sweeps_leave_figures_empty_and_fits_absent() {
+    let data = StudyData::default();
+    for f in (ep21::PAPER.figures)() {
+        let d = f.data("ep21", &data);
+        assert!(d.fits.is_empty(), "{}", f.key);
+        assert!(!d.missing.is_empty(), "{}", f.key);
+    }
+    assert!((ep21::PAPER.compare)(&data).is_empty());
+}
