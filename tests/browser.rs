@@ -71,6 +71,9 @@ impl Page {
                 "--headless",
                 "--no-sandbox",
                 "--disable-gpu",
+                // WebGL on the CPU (the heap viewer)
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
                 "--disable-quic",
                 "--no-first-run",
                 "--disable-background-networking",
@@ -259,7 +262,8 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
         let id = run_sweep(&server, &spec).await;
         let flux_id = run_sweep(&server, &flux).await;
         let coarse_id = run_sweep(&server, &coarse).await;
-        run_study(&server).await;
+        run_study(&server, "lh93").await;
+        run_study(&server, "ep21").await;
         let first_sample = |sweep: String| {
             let url = server.url.clone();
             async move {
@@ -286,6 +290,7 @@ fn the_results_browser_shows_sweeps_figures_and_piles() {
     the_form_and_the_reports(&mut tab);
     a_failed_sample(&mut tab, &coarse_id);
     the_study_buttons(&mut tab, &server, &rt);
+    the_second_paper(&mut tab, &server, &rt);
 }
 
 fn the_list_and_the_sweep(tab: &mut Page, id: &str) {
@@ -493,15 +498,15 @@ fn the_study_buttons(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runti
     });
 }
 
-/// Queues every sweep of the paper's study (small, quick) and waits for them.
-async fn run_study(server: &Server) {
+/// Queues every sweep of a paper's study (small, quick) and waits for them.
+async fn run_study(server: &Server, paper: &str) {
     let client = reqwest::Client::new();
-    let study = get(&format!("{}/api/studies/lh93", server.url)).await;
+    let study = get(&format!("{}/api/studies/{paper}", server.url)).await;
     let mut ids = Vec::new();
     for sweep in study["sweeps"].as_array().unwrap() {
         let key = sweep["key"].as_str().unwrap();
         let created: Value = client
-            .post(format!("{}/api/studies/lh93/sweeps/{key}", server.url))
+            .post(format!("{}/api/studies/{paper}/sweeps/{key}", server.url))
             .json(&json!({"fidelity": "quick", "reduced": true, "samples": 2}))
             .send()
             .await
@@ -577,4 +582,116 @@ fn paper_figures(tab: &mut Page) {
         }
         tab.screenshot(&format!("paper-figure-{fig}.png"));
     }
+}
+
+/// The completed sample with the most grains of the newest sweep queued
+/// for a study sweep (`ep21/heaps`), by its metric `grains`.
+async fn study_sample(server: &Server, study: &str, grains: &str) -> Option<String> {
+    let sweeps = get(&format!("{}/api/sweeps", server.url)).await;
+    let id = sweeps["sweeps"]
+        .as_array()?
+        .iter()
+        .find(|s| s["study"] == study)?["id"]
+        .as_str()?
+        .to_string();
+    let samples = get(&format!("{}/api/sweeps/{id}/samples", server.url)).await;
+    let size = |s: &Value| s["metrics"][grains].as_f64().unwrap_or(0.0);
+    samples["samples"]
+        .as_array()?
+        .iter()
+        .filter(|s| s["outcome"] == "completed")
+        .max_by(|a, b| size(a).total_cmp(&size(b)))?["sample_hash"]
+        .as_str()
+        .map(String::from)
+}
+
+/// Elekes & Parteli: every figure with its means, fits and their table,
+/// regime I marked; a heap in 3D that turns, its side views with their
+/// triangles and its pour history; a packing's sub-columns and φ(z).
+fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtime) {
+    tab.visit("/papers");
+    wait_for(
+        tab,
+        "the second paper",
+        "document.querySelector('[data-paper=\"ep21\"] ul li a')",
+    );
+    assert_eq!(count(tab, "[data-paper=\"ep21\"] ul li a"), 7);
+    // (figure, fitted curves at least, fit rows, flagged points at least)
+    let expected = [
+        ("2", 1, 1, 0),
+        ("3a", 1, 2, 1),
+        ("3b", 0, 0, 0),
+        ("3c", 1, 2, 0),
+        ("4", 1, 1, 1),
+        ("5", 0, 1, 0),
+        ("regime", 0, 0, 1),
+    ];
+    for (fig, curves, rows, flagged) in expected {
+        tab.visit(&format!("/paper/ep21/figure/{fig}"));
+        wait_for(
+            tab,
+            &format!("ep21 figure {fig}"),
+            "document.querySelector('#figure-plot svg') && document.querySelectorAll('#figure-plot svg circle.mean').length",
+        );
+        assert!(
+            count(tab, "#figure-plot svg polyline.fit") >= curves,
+            "figure {fig}"
+        );
+        assert_eq!(count(tab, "#fits tbody tr"), rows, "figure {fig}");
+        assert!(
+            count(tab, "#figure-plot svg circle.flagged") >= flagged,
+            "figure {fig}"
+        );
+        tab.screenshot(&format!("ep21-figure-{fig}.png"));
+    }
+    let (heap, packing) = rt.block_on(async {
+        (
+            study_sample(server, "ep21/heaps", "heap_grains").await,
+            study_sample(server, "ep21/packing", "bed_height").await,
+        )
+    });
+    let heap = heap.expect("a completed heap in the reduced study");
+    tab.visit(&format!("/sample/{heap}"));
+    let drawn = wait_for(
+        tab,
+        "the heap in 3D",
+        "document.querySelector('#heap3d') && document.querySelector('#heap3d').dataset.drawn",
+    );
+    assert!(drawn.as_str().unwrap().parse::<u64>().unwrap() > 10);
+    let yaw = tab.evaluate("document.querySelector('#heap3d').dataset.yaw");
+    tab.evaluate(
+        "document.querySelector('#heap3d').dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight'}))",
+    );
+    assert_ne!(
+        tab.evaluate("document.querySelector('#heap3d').dataset.yaw"),
+        yaw,
+        "the arrow key turns the heap"
+    );
+    // The canvas holds the heap's colours, not only the white background.
+    let coloured = tab.evaluate(
+        "(() => { const c = document.querySelector('#heap3d'); const gl = c.getContext('webgl'); \
+         const px = new Uint8Array(c.width * c.height * 4); gl.readPixels(0, 0, c.width, c.height, gl.RGBA, gl.UNSIGNED_BYTE, px); \
+         let n = 0; for (let i = 0; i < px.length; i += 4) if (px[i] < 200 || px[i + 2] < 200) n++; return n; })()",
+    );
+    assert!(coloured.as_u64().unwrap() > 1000, "{coloured}");
+    for view in ["xz", "yz"] {
+        assert_eq!(count(tab, &format!("#side-{view} svg polygon.triangle")), 1);
+        assert_eq!(count(tab, &format!("#side-{view} svg polygon.outline")), 1);
+    }
+    let title = tab.evaluate("document.querySelector('#side-xz svg text').textContent");
+    assert!(title.as_str().unwrap().contains("θ_r ="), "{title}");
+    assert_eq!(count(tab, "#energy svg polyline.trace"), 1);
+    assert_eq!(count(tab, "#series-heap_grains svg polyline.trace"), 1);
+    tab.screenshot("ep21-heap.png");
+
+    let packing = packing.expect("a completed packing in the reduced study");
+    tab.visit(&format!("/sample/{packing}"));
+    wait_for(
+        tab,
+        "the sub-columns",
+        "document.querySelectorAll('#quarters tr').length",
+    );
+    assert_eq!(count(tab, "#quarters tr"), 4);
+    assert_eq!(count(tab, "#series-phi_z svg polyline.trace"), 1);
+    tab.screenshot("ep21-packing.png");
 }

@@ -5,7 +5,7 @@
 // the stored sweeps. The page holds no physics and no list of metrics.
 "use strict";
 
-const { figurePlot, linePlot, pilePlot, svgText, download, downloadPng, fmt } = window.plots;
+const { figurePlot, linePlot, pilePlot, sideViewPlot, svgText, download, downloadPng, fmt } = window.plots;
 const view = document.getElementById("view");
 let timer = null;
 
@@ -422,8 +422,21 @@ function figurePanel(fig, name, sweepId) {
   const errSel = h("select", { id: "figure-errors", onchange: e => { errors = e.target.value; draw(); } },
     h("option", { value: "sd" }, "error bars: sample sd (the paper's)"), h("option", { value: "sem" }, "error bars: standard error"));
   return h("div", {}, h("div", { class: "controls" }, errSel), box, h("p", { class: "muted" }, fig.caption),
+    fitsTable(fig.fits || []),
     downloads(() => box.querySelector("svg"), name, sweepId),
     h("p", { class: "muted" }, "Large dots: mean over samples, with error bars; faint dots: single samples; open circles: the paper's quoted values; dashed: theory, evaluated by the service. Hover or focus a point for its numbers."));
+}
+
+// The fits a figure draws: each constant with its standard error and 95 %
+// interval, or why the fit could not be made.
+function fitsTable(fits) {
+  if (!fits.length) return "";
+  const constants = f => f.fit ? f.fit.params.map(p => `${p.name} = ${fmt(p.value, 4)} ± ${fmt(p.se, 2)} [${fmt(p.lo, 4)}, ${fmt(p.hi, 4)}]`).join("; ") : f.error;
+  return h("table", { id: "fits" },
+    h("thead", {}, h("tr", {}, h("th", {}, "fit"), h("th", {}, "constants ± standard error [95 % interval]"), h("th", {}, "R²"), h("th", {}, "points"))),
+    h("tbody", {}, ...fits.map(f => h("tr", { class: f.fit ? "fit" : "fit failed" },
+      h("td", {}, f.label), h("td", {}, constants(f)),
+      h("td", { class: "num" }, f.fit ? fmt(f.fit.r2, 4) : "—"), h("td", { class: "num" }, f.fit ? String(f.fit.points) : "—")))));
 }
 
 // One sweep drawn as a paper's figure.
@@ -500,6 +513,33 @@ function curves(rep) {
     c.band ? h("p", { class: "muted" }, `Band: ${fmt(c.band.mean)} ± ${fmt(c.band.hi - c.band.mean)} (mean ± sd).`) : ""));
 }
 
+// A poured heap: the heap in 3D, and its two side views with the
+// equal-area triangles that give θ_r.
+function heapPanels(rep) {
+  const grains = (rep.final_state || { grains: [] }).grains;
+  const canvas = h("canvas", { id: "heap3d", width: 760, height: 460, tabindex: "0",
+    "aria-label": "the heap in 3D: drag or use the arrow keys to turn it, the wheel or + and − to zoom" });
+  const views = (rep.details && rep.details.side_views) || {};
+  const d = rep.scene.grains.diameter, plate = rep.scene.heap.plate;
+  const sides = (rep.profiles || []).map((profile, k) => {
+    const label = k === 0 ? "xz" : "yz", view = views[label];
+    return view ? h("div", { class: "figure", id: `side-${label}` }, sideViewPlot({ profile, d, plate, view, label })) : "";
+  });
+  const panels = [h("h2", {}, `The heap: ${grains.length} grains`), canvas,
+    h("p", { class: "muted", id: "heap3d-help" }, "Drag or use the arrow keys to turn it; the wheel or + and − zoom. Colour: height."),
+    h("h2", {}, "Side views"), h("div", { class: "two" }, ...sides)];
+  return { panels, after: () => { if (!window.heap3d.viewer(canvas, grains)) canvas.replaceWith(h("p", { class: "muted" }, "WebGL is not available in this browser.")); } };
+}
+
+// A packed column: φ in each of the four sub-columns of the slab.
+function packingPanels(rep) {
+  const det = rep.details || {};
+  const quarters = det.quarters || [];
+  const rows = quarters.map((phi, k) => h("tr", {}, h("th", {}, `sub-column ${k + 1}`), h("td", { class: "num" }, fmt(phi, 4))));
+  const slab = det.slab ? `between ${fmt(det.slab[0], 3)} d and ${fmt(det.slab[1], 3)} d` : "";
+  return { panels: [h("h2", {}, `Packing fraction of the four sub-columns ${slab}`), h("table", { id: "quarters" }, h("tbody", {}, ...rows))], after: () => {} };
+}
+
 async function sampleView(hash) {
   await loadRegistry();
   const r = await api(`/api/samples/${hash}`);
@@ -513,16 +553,18 @@ async function sampleView(hash) {
   const physics = Object.entries(rep.options.physics || {}).map(([k, v]) => `, ${k.replace(/_/g, " ")} ${v}`).join("");
   const sceneText = JSON.stringify(rep.scene, null, 2);
   const copied = h("span", { class: "muted", "aria-live": "polite" });
+  const special = rep.protocol === "heap" && rep.final_state ? heapPanels(rep)
+    : rep.protocol === "packing" ? packingPanels(rep) : { panels: [], after: () => {} };
+  const pile = rep.protocol === "heap" ? [] : [h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"),
+    h("div", { class: "figure", id: "pile" }, pileFigure(rep))];
   setView(
     h("h1", {}, `Sample: ${rep.protocol}, seed ${rep.seed}`),
     h("div", { class: "panel" },
       h("p", {}, h("span", { class: `tag ${rep.outcome.status}` }, rep.outcome.status), " ", outcomeReason(rep.outcome),
         ` · ${rep.dimension}D, model ${rep.model} · ${rep.grains.initial} grains at start, ${rep.grains.lost} lost, ${rep.grains.final} at end · ${rep.iterations} steps, ${fmt(rep.simulated_time)} s simulated, ${fmt(rep.wall_time, 2)} s wall · ${rep.options.integrator}${physics} · ${rep.engine}`),
       anglesTable(rep)),
-    h("div", { class: "two" },
-      h("div", {}, h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"),
-        h("div", { class: "figure", id: "pile" }, pileFigure(rep))),
-      h("div", {}, h("h2", {}, "Energy"), ke)),
+    ...special.panels,
+    pile.length ? h("div", { class: "two" }, h("div", {}, ...pile), h("div", {}, h("h2", {}, "Energy"), ke)) : h("div", {}, h("h2", {}, "Energy"), ke),
     ...curves(rep),
     h("h2", {}, "Scene"),
     h("p", {}, h("button", { class: "secondary", id: "copy-scene", onclick: async () => {
@@ -530,6 +572,7 @@ async function sampleView(hash) {
       catch (_) { copied.textContent = "Select the text below and copy it; then: repose run scene.json"; }
     } }, "Copy scene JSON"), " ", copied),
     h("pre", { id: "scene-json" }, sceneText));
+  special.after();
 }
 
 // ---------------------------------------------------------------- help

@@ -108,7 +108,7 @@ function legendItems(series) {
   });
 }
 
-const DASH = { theory: "6 4", level: "2 3" };
+const DASH = { theory: "6 4", level: "2 3", fit: "none" };
 
 // A figure as the API serves it (see /api/openapi.json, FigureData):
 // measured means with error bars and their single samples, theory curves,
@@ -129,11 +129,16 @@ function figurePlot({ fig, errors = "sd", title = null }) {
   const items = legendItems(fig.series);
   const legendWidth = items.length ? 40 + 7.2 * Math.max(...items.map(it => it.name.length)) : 0;
   const xLabel = fig.log_x ? `${fig.x_label} (log scale)` : fig.x_label;
-  const f = frame({ xRange: extent(xs), yRange: extent(ys), xLabel, yLabel: fig.y_label, title, legendWidth, xTick: fig.log_x ? t => fmt(Math.pow(10, t)) : null });
+  const f = frame({ xRange: extent(xs), yRange: extent(ys), xLabel, yLabel: fig.y_label, title, legendWidth, xTick: fig.log_x ? t => fmt(Number(Math.pow(10, t).toPrecision(3))) : null });
   const X = v => f.x(tx(v));
   let k = 0;
+  // A fitted curve takes the colour of the measured series it was fitted to.
+  const colours = new Map();
   for (const s of fig.series) {
-    const colour = (s.kind === "measured" || s.kind === "recorded") ? PALETTE[k++ % PALETTE.length] : "#333";
+    let colour = (s.kind === "measured" || s.kind === "recorded") ? PALETTE[k++ % PALETTE.length] : "#333";
+    const key = JSON.stringify(s.series_value === undefined ? null : s.series_value);
+    if (s.kind === "measured") colours.set(key, colour);
+    else if (s.kind === "fit" && colours.has(key)) colour = colours.get(key);
     const g = el("g", { class: `series ${s.kind}`, "data-series": s.name || "" }, f.plot);
     const pts = s.points.filter(p => Number.isFinite(p.y));
     if (s.kind === "measured") drawMeans(f, g, s, pts, X, colour, errors);
@@ -157,9 +162,11 @@ function drawMeans(f, g, s, pts, X, colour, errors) {
   for (const p of pts) {
     const e = (errors === "sem" ? p.sem : p.sd) || 0;
     errorBar(f, g, X(p.x), p.y, e, colour);
-    const dot = el("circle", { cx: X(p.x), cy: f.y(p.y), r: 5, fill: colour, class: "mean", tabindex: "0" }, g);
+    // A flagged point (e.g. regime I) is drawn open.
+    const look = p.flag ? { fill: "#ffffff", stroke: colour, "stroke-width": "2", class: "mean flagged" } : { fill: colour, class: "mean" };
+    const dot = el("circle", { cx: X(p.x), cy: f.y(p.y), r: 5, tabindex: "0", ...look }, g);
     const text = `${s.name ? s.name + "\n" : ""}x = ${fmt(p.x)}\nmean = ${fmt(p.y)}\nsd = ${fmt(p.sd)}\nsem = ${fmt(p.sem)}\nn = ${p.n}` +
-      (p.failures ? `\nwithout result: ${p.failures}` : "");
+      (p.failures ? `\nwithout result: ${p.failures}` : "") + (p.flag ? `\n${p.flag}` : "");
     tip(dot, text);
   }
 }
@@ -309,5 +316,26 @@ function downloadPng(name, svg) {
   img.src = "data:image/svg+xml;charset=utf-8," + encodeURIComponent(svgText(svg));
 }
 
-window.plots = { figurePlot, linePlot, pilePlot, svgText, download, downloadPng, fmt };
+// One side view of a heap: the outline of its projection (columns of
+// `profile`, lengths in m, shown in grain diameters d) over the plate, and
+// the triangle on the plate of the same area, whose slope is θ_r =
+// atan(4A/b²) (`view`: the service's measurement of this projection).
+function sideViewPlot({ profile, d, plate, view, label }) {
+  const xs = profile.x.map(v => v / d), hs = profile.h.map(v => v / d), w = profile.cell_width / d;
+  const half = plate / 2, apex = 2 * view.area / plate;
+  const top = Math.max(apex, ...hs) * 1.15 + 0.5;
+  const f = frame({ width: 560, height: 300, xRange: [-half - 1, half + 1], yRange: [0, top],
+    xLabel: `${label[0]} (d)`, yLabel: "z (d)", title: `${label} projection: θ_r = ${fmt(view.theta_plate, 2)}°` });
+  const outline = [`${f.x(xs[0] - w / 2)},${f.y(0)}`];
+  xs.forEach((x, k) => { outline.push(`${f.x(x - w / 2)},${f.y(hs[k])}`, `${f.x(x + w / 2)},${f.y(hs[k])}`); });
+  outline.push(`${f.x(xs[xs.length - 1] + w / 2)},${f.y(0)}`);
+  el("polygon", { points: outline.join(" "), fill: "#2357b5", "fill-opacity": "0.35", stroke: "#2357b5", class: "outline" }, f.plot);
+  el("polygon", { points: `${f.x(-half)},${f.y(0)} ${f.x(0)},${f.y(apex)} ${f.x(half)},${f.y(0)}`, fill: "none", stroke: "#b54a23", "stroke-width": "2", "stroke-dasharray": "6 4", class: "triangle" }, f.plot);
+  el("line", { x1: f.x(-half), y1: f.y(0), x2: f.x(half), y2: f.y(0), stroke: "#1d2330", "stroke-width": "3" }, f.plot);
+  const note = el("text", { x: f.x(-half) + 6, y: f.m.top + 14, fill: "#1d2330", "font-size": "12" }, f.svg);
+  note.textContent = `area ${fmt(view.area, 3)} d², equal-area triangle on the ${fmt(plate)} d plate; roughness ${fmt(view.roughness, 2)} d`;
+  return f.svg;
+}
+
+window.plots = { figurePlot, linePlot, pilePlot, sideViewPlot, svgText, download, downloadPng, fmt };
 })();

@@ -250,6 +250,11 @@ const WEB: &[(&str, &str, &str)] = &[
         include_str!("../../../web/style.css"),
     ),
     (
+        "heap3d.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../../web/heap3d.js"),
+    ),
+    (
         "markdown.js",
         "text/javascript; charset=utf-8",
         include_str!("../../../web/markdown.js"),

@@ -6,7 +6,7 @@
 use crate::data::{StudyData, SweepData};
 use crate::figure::{curve, FitData, Kind, SeriesData};
 use crate::fit::{fit, Datum, Fit, FitError, Model};
-use crate::papers::{series_value, x_value, Layer};
+use crate::papers::{series_value, symbol, x_value, Layer};
 use repose_store::{Aggregate, Point};
 use serde_json::Value;
 
@@ -43,7 +43,7 @@ pub(crate) fn fits(
                 .into_iter()
                 .map(|(value, data)| {
                     let name = match &value {
-                        Some(v) => format!("{label}, {} = {v}", by.unwrap_or_default()),
+                        Some(v) => format!("{label}, {} = {v}", symbol(by.unwrap_or_default())),
                         None => label.to_string(),
                     };
                     fitted(model, start, &name, value, &data, log_x, series)

@@ -252,7 +252,7 @@ impl EngineJob<3> for Job<'_> {
             Err(outcome) => outcome,
         };
         findings.inserted = pour.state.inserted;
-        findings.series.push(pour.crest_curve());
+        findings.series.extend(pour.history());
         run.report(outcome, findings)
     }
 }
@@ -304,6 +304,8 @@ struct PourState {
     inserted: usize,
     /// `[time, crest]` before each insertion, in √(d/g) and d.
     crest: Vec<[f64; 2]>,
+    /// `[time, grains]` at rest on the plate before each insertion.
+    heap: Vec<[f64; 2]>,
     /// Simulated time of the last insertion that added grains, s.
     last_insertion: f64,
 }
@@ -314,6 +316,7 @@ impl PourState {
             stream: Stream::new(seed),
             inserted: 0,
             crest: Vec::new(),
+            heap: Vec::new(),
             last_insertion: 0.0,
         }
     }
@@ -328,8 +331,10 @@ impl Pour<'_> {
         let steps = ((self.spec.interval * s.time / run.sim.dt).round() as u64).max(1);
         while self.state.inserted < self.spec.max_grains {
             run.checkpoint(&self.state);
-            let crest = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
-            self.state.crest.push([run.sim.time / s.time, crest / s.d]);
+            let (crest, resting) = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
+            let t = run.sim.time / s.time;
+            self.state.crest.push([t, crest / s.d]);
+            self.state.heap.push([t, resting as f64]);
             let top = self.spec.height * s.d;
             if crest > top - s.d {
                 return Err(Outcome::Unmeasurable {
@@ -404,28 +409,45 @@ impl Pour<'_> {
         new.len()
     }
 
-    fn crest_curve(&self) -> Curve {
-        Curve {
-            name: "crest".into(),
-            title: "height of the heap's crest before each insertion".into(),
+    /// The pour history: the crest and the grains at rest before each insertion.
+    fn history(&self) -> [Curve; 2] {
+        let curve = |name: &str, title: &str, y_label: &str, points: &[[f64; 2]]| Curve {
+            name: name.into(),
+            title: title.into(),
             x_label: "time (√(d/g))".into(),
-            y_label: "crest (d)".into(),
-            points: self.state.crest.clone(),
+            y_label: y_label.into(),
+            points: points.to_vec(),
             band: None,
-        }
+        };
+        [
+            curve(
+                "crest",
+                "height of the heap's crest before each insertion",
+                "crest (d)",
+                &self.state.crest,
+            ),
+            curve(
+                "heap_grains",
+                "pour history: grains at rest in the heap before each insertion",
+                "grains in the heap",
+                &self.state.heap,
+            ),
+        ]
     }
 }
 
 /// The highest grain top among grains slower than `slow` (grains still
-/// falling from the prism do not count), m.
-fn crest(p: &Particles<3>, slow: f64) -> f64 {
+/// falling from the prism do not count), m, and how many grains are that slow.
+fn crest(p: &Particles<3>, slow: f64) -> (f64, usize) {
     let mut top = 0.0f64;
+    let mut resting = 0;
     for i in 0..p.len() {
         if p.vel[i].norm_squared() < slow * slow {
             top = top.max(p.pos[i].z + p.radius[i]);
+            resting += 1;
         }
     }
-    top
+    (top, resting)
 }
 
 /// One side view of a heap.

@@ -43,6 +43,8 @@ pub struct Paper {
 pub struct Quantity {
     /// The name figures use in place of an axis, e.g. `ep21.bond`.
     pub name: &'static str,
+    /// Its symbol in labels, e.g. `Bo`.
+    pub symbol: &'static str,
     pub f: fn(&Map<String, Value>) -> Option<f64>,
 }
 
@@ -60,6 +62,15 @@ pub fn x_value(point: &Map<String, Value>, x: &str) -> Option<f64> {
         .flat_map(|p| p.quantities)
         .find(|q| q.name == x)
         .and_then(|q| (q.f)(point))
+}
+
+/// How labels name an axis or quantity: its symbol, or the axis itself.
+pub fn symbol(x: &str) -> &str {
+    PAPERS
+        .iter()
+        .flat_map(|p| p.quantities)
+        .find(|q| q.name == x)
+        .map_or(x, |q| q.symbol)
 }
 
 /// The value that names a point's series along `axis` (an axis value, or

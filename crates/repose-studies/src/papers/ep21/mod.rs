@@ -44,25 +44,35 @@ pub const BOND_REGIME_I: f64 = 1e4;
 static QUANTITIES: [Quantity; 4] = [
     Quantity {
         name: "ep21.d_um",
+        symbol: "d",
         f: d_um,
     },
     Quantity {
         name: "ep21.g_tilde",
+        symbol: "g̃",
         f: g_tilde,
     },
     Quantity {
         name: "ep21.bond",
+        symbol: "Bo",
         f: bond,
     },
     Quantity {
         name: "ep21.d_sqrt_g_um",
+        symbol: "d√g̃",
         f: |p| Some(d_um(p)? * g_tilde(p)?.sqrt()),
     },
 ];
 
+/// `x` to nine significant digits: a value set as 0.165 g reads back as
+/// 0.165, not 0.16499999999999998, in labels and series keys.
+fn rounded(x: f64) -> f64 {
+    format!("{x:.8e}").parse().unwrap_or(x)
+}
+
 /// The grain diameter of a point, µm.
 pub fn d_um(point: &Map<String, Value>) -> Option<f64> {
-    Some(point.get("grains.diameter")?.as_f64()? * 1e6)
+    Some(rounded(point.get("grains.diameter")?.as_f64()? * 1e6))
 }
 
 /// The gravity of a point in Earth's: g̃ = |g| / 9.81 m/s².
@@ -72,7 +82,7 @@ pub fn g_tilde(point: &Map<String, Value>) -> Option<f64> {
         .iter()
         .map(|c| c.as_f64().map(|c| c * c))
         .sum::<Option<f64>>()?;
-    Some(g2.sqrt() / G_EARTH)
+    Some(rounded(g2.sqrt() / G_EARTH))
 }
 
 /// The Bond number of a point, Bo = 12 γ / (d² g ρ), with the paper's
@@ -85,7 +95,7 @@ pub fn bond(point: &Map<String, Value>) -> Option<f64> {
 
 /// The gravity vector of g̃.
 fn gravity(g_tilde: f64) -> Value {
-    json!([0.0, 0.0, -(g_tilde * G_EARTH)])
+    json!([0.0, 0.0, -rounded(g_tilde * G_EARTH)])
 }
 
 fn values(list: impl IntoIterator<Item = Value>) -> Vec<Value> {
