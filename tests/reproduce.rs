@@ -1,6 +1,7 @@
-//! `repose reproduce --reduced` through a real server on SQLite: the report
-//! is written, every number in it equals statistics recomputed from the
-//! stored samples, and θ_R rises with μ.
+//! `repose reproduce --reduced` through a real server on SQLite, for each
+//! paper: the report is written, every number in it equals statistics
+//! recomputed from the stored samples, its figures and fits are the ones
+//! the API serves, and (first paper) θ_R rises with μ.
 
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -68,7 +69,8 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
 
     let sweeps = numbers["sweeps"].as_array().unwrap();
     assert_eq!(sweeps.len(), 6);
-    let checked = points_match_samples(&server, sweeps, &markdown).await;
+    let metrics = ["theta_r", "theta_r_line", "theta_r_endpoints", "theta_t"];
+    let checked = points_match_samples(&server, sweeps, &markdown, &metrics).await;
     assert!(checked >= 20, "only {checked} aggregates checked");
 
     // The comparison table quotes the same aggregates it names.
@@ -96,7 +98,7 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
     println!("θ_R: μ 0.1 {low:.2}°, 0.2 {mid:.2}°, 0.3 {high:.2}°");
     assert!(high > low + 5.0, "θ_R does not rise with μ: {low} → {high}");
 
-    figures_are_the_served_ones(&server, &numbers).await;
+    figures_are_the_served_ones(&server, &numbers, "lh93", 9).await;
 
     // The page can open the report the server carries.
     let resp = reqwest::get(format!("{}/docs/reproduction.md", server.url))
@@ -108,7 +110,12 @@ async fn a_reduced_reproduction_reports_the_stored_aggregates() {
 
 /// Every point in the report against the samples the server stored, and
 /// the Markdown showing the same numbers; returns how many were checked.
-async fn points_match_samples(server: &Server, sweeps: &[Value], markdown: &str) -> usize {
+async fn points_match_samples(
+    server: &Server,
+    sweeps: &[Value],
+    markdown: &str,
+    metrics: &[&str],
+) -> usize {
     // Every point in the report against the samples the server stored.
     let mut checked = 0;
     for sweep in sweeps {
@@ -122,7 +129,7 @@ async fn points_match_samples(server: &Server, sweeps: &[Value], markdown: &str)
         assert_eq!(points.len(), by_point.len(), "{id}");
         for p in points {
             let stored = &by_point[&p["point"].to_string()];
-            for metric in ["theta_r", "theta_r_line", "theta_r_endpoints", "theta_t"] {
+            for metric in metrics.iter().copied() {
                 let values: Vec<f64> = stored
                     .iter()
                     .filter_map(|s| s["metrics"][metric].as_f64())
@@ -159,7 +166,7 @@ async fn points_match_samples(server: &Server, sweeps: &[Value], markdown: &str)
 
 /// Each figure in the report is the figure data the API serves the page
 /// for the same sweeps.
-async fn figures_are_the_served_ones(server: &Server, numbers: &Value) {
+async fn figures_are_the_served_ones(server: &Server, numbers: &Value, paper: &str, count: usize) {
     let sweeps = numbers["sweeps"].as_array().unwrap();
     let bindings: Vec<String> = sweeps
         .iter()
@@ -172,11 +179,11 @@ async fn figures_are_the_served_ones(server: &Server, numbers: &Value) {
         })
         .collect();
     let figures = numbers["figures"].as_array().unwrap();
-    assert_eq!(figures.len(), 9);
+    assert_eq!(figures.len(), count);
     for f in figures {
         let key = f["figure"].as_str().unwrap();
         let served = get(&format!(
-            "{}/api/studies/lh93/figures/{key}?sweeps={}",
+            "{}/api/studies/{paper}/figures/{key}?sweeps={}",
             server.url,
             bindings.join(",")
         ))
@@ -184,4 +191,78 @@ async fn figures_are_the_served_ones(server: &Server, numbers: &Value) {
         assert_eq!(&served, f, "figure {key}");
         assert!(f["missing"].as_array().unwrap().is_empty(), "{key}: {f}");
     }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregates() {
+    let db = format!("sqlite://{}", scratch("repro-ep21.db").display());
+    let server = Server::start(&db, 2);
+    let out = scratch("report").with_file_name("reproduction-ep21.md");
+    let run = Command::new(BIN)
+        .args([
+            "reproduce",
+            "--paper",
+            "ep21",
+            "--reduced",
+            "--samples",
+            "2",
+        ])
+        .args(["--preset", "quick", "-q", "--server", &server.url])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("repose reproduce runs");
+    assert!(
+        run.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let markdown = std::fs::read_to_string(&out).expect("the report is written");
+    let numbers: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("reproduction-ep21.json")).unwrap(),
+    )
+    .unwrap();
+    for fig in ["fig2", "fig3a", "fig3b", "fig3c", "fig4", "fig5", "regime"] {
+        let name = format!("reproduction-ep21-{fig}.svg");
+        let svg = std::fs::read_to_string(out.with_file_name(&name))
+            .unwrap_or_else(|_| panic!("no SVG for {fig}"));
+        assert!(svg.starts_with("<svg") && !svg.contains("NaN"), "{fig}");
+        assert!(markdown.contains(&name), "{fig} not linked");
+    }
+    let sweeps = numbers["sweeps"].as_array().unwrap();
+    assert_eq!(sweeps.len(), 3);
+    let metrics = ["theta_r", "surface_roughness", "packing_fraction"];
+    let checked = points_match_samples(&server, sweeps, &markdown, &metrics).await;
+    assert!(checked >= 8, "only {checked} aggregates checked");
+    figures_are_the_served_ones(&server, &numbers, "ep21", 7).await;
+
+    // The fitted constants in the comparison are the fits the API draws.
+    let figure2 = numbers["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["figure"] == "2")
+        .unwrap();
+    let row = |q: &str| {
+        numbers["comparison"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["quantity"].as_str().unwrap().starts_with(q))
+            .unwrap_or_else(|| panic!("no row {q}"))
+            .clone()
+    };
+    let mu = row("μ_∞ (eq. 1");
+    match figure2["fits"][0]["fit"]["params"][0]["value"].as_f64() {
+        Some(fitted) => assert_eq!(mu["ours"]["mean"].as_f64(), Some(fitted)),
+        None => assert_eq!(mu["verdict"], "no result"),
+    }
+    assert!(markdown.contains("## Fits"), "no fits section");
+    assert!(markdown.contains("θ_r,nc"), "no θ_r,nc row");
+    assert!(markdown.contains("regime boundary"), "no regime row");
+    println!(
+        "ep21 reduced reproduction: {:.1} s",
+        numbers["wall_time_s"].as_f64().unwrap()
+    );
 }

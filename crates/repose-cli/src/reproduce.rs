@@ -10,7 +10,6 @@ use repose_physics::{protocols, Preset, ENGINE};
 use repose_store::Store;
 use repose_studies::papers::{self, Paper};
 use repose_studies::reproduction::{DoneSweep, Reproduction};
-use repose_studies::tradeoff::preset_shift;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -28,7 +27,7 @@ pub struct ReproduceArgs {
     /// Embedded workers (default: one per core).
     #[arg(long)]
     workers: Option<usize>,
-    /// The paper to reproduce (its study key).
+    /// The paper to reproduce (its study key), or `both`.
     #[arg(long, default_value = "lh93")]
     paper: String,
     /// Fidelity preset of every sweep.
@@ -37,9 +36,14 @@ pub struct ReproduceArgs {
     /// Samples (seeds) per point; by default the paper's count.
     #[arg(long)]
     samples: Option<u32>,
-    /// The Markdown report; figures (SVG) and the numbers (JSON) go beside it.
-    #[arg(long, default_value = "docs/reproduction.md")]
-    out: PathBuf,
+    /// The Markdown report of one paper; figures (SVG) and the numbers
+    /// (JSON) go beside it. By default `docs/reproduction.md` (lh93) or
+    /// `docs/reproduction-ep21.md` (ep21) in --out-dir.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The folder of the reports when --out names none.
+    #[arg(long, default_value = "docs")]
+    out_dir: PathBuf,
     /// A small version for tests: fewer points in smaller boxes.
     #[arg(long)]
     reduced: bool,
@@ -53,29 +57,53 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
     if args.samples == Some(0) {
         bail!("--samples must be at least 1");
     }
-    let Some(paper) = papers::find(&args.paper) else {
-        let keys: Vec<&str> = papers::PAPERS.iter().map(|p| p.key).collect();
-        bail!(
-            "--paper: no study `{}` (studies are {})",
-            args.paper,
-            keys.join(", ")
-        );
+    let chosen: Vec<&'static Paper> = if args.paper == "both" {
+        papers::PAPERS.to_vec()
+    } else {
+        match papers::find(&args.paper) {
+            Some(p) => vec![p],
+            None => {
+                let keys: Vec<&str> = papers::PAPERS.iter().map(|p| p.key).collect();
+                bail!(
+                    "--paper: no study `{}` (studies are {}, or both)",
+                    args.paper,
+                    keys.join(", ")
+                );
+            }
+        }
     };
+    if chosen.len() > 1 && args.out.is_some() {
+        bail!("--out names one report: with --paper both, give --out-dir");
+    }
     runtime()?.block_on(async {
-        let clock = Instant::now();
         let Some(url) = args.server.clone() else {
-            return with_own_server(&args, paper, clock).await;
+            return with_own_server(&args, &chosen).await;
         };
-        reproduce(&args, paper, url.trim_end_matches('/'), clock).await
+        reproduce_all(&args, &chosen, url.trim_end_matches('/')).await
     })
 }
 
-/// Starts a server with embedded workers on `--database`, reproduces, stops it.
-async fn with_own_server(
+/// Reproduces each paper in turn; each report states its own time.
+async fn reproduce_all(
     args: &ReproduceArgs,
-    paper: &Paper,
-    clock: Instant,
+    papers: &[&Paper],
+    server: &str,
 ) -> anyhow::Result<ExitCode> {
+    for paper in papers {
+        reproduce(args, paper, server, Instant::now()).await?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Where a paper's report goes.
+fn out_of(args: &ReproduceArgs, paper: &Paper) -> PathBuf {
+    args.out
+        .clone()
+        .unwrap_or_else(|| args.out_dir.join(format!("{}.md", paper.report)))
+}
+
+/// Starts a server with embedded workers on `--database`, reproduces, stops it.
+async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Result<ExitCode> {
     let store = Store::open(&args.database)
         .await
         .with_context(|| format!("cannot open the database {}", args.database))?;
@@ -99,7 +127,7 @@ async fn with_own_server(
         "repose: reproducing on http://{addr}/ ({}, {workers} workers)",
         args.database
     );
-    let result = reproduce(args, paper, &format!("http://{addr}"), clock).await;
+    let result = reproduce_all(args, papers, &format!("http://{addr}")).await;
     let _ = tx.send(true);
     for h in handles {
         let _ = h.await;
@@ -191,6 +219,7 @@ async fn reproduce(
     clock: Instant,
 ) -> anyhow::Result<ExitCode> {
     let client = crate::admin::http()?;
+    let out = out_of(args, paper);
     let queued = queue_all(&client, args, paper, server).await?;
     wait(&client, server, &queued, args.quiet).await?;
     let elapsed = clock.elapsed().as_secs_f64();
@@ -230,7 +259,7 @@ async fn reproduce(
     let report = Reproduction {
         paper: paper.key.into(),
         title: paper.title.into(),
-        command: command(args),
+        command: command(args, paper),
         engine: ENGINE.into(),
         preset: args.preset.name().into(),
         preset_settings: preset_settings(paper, args.preset),
@@ -246,21 +275,24 @@ async fn reproduce(
         sweeps,
         figures,
         comparison,
-        preset_accuracy: preset_accuracy(&args.out, args.preset),
+        preset_accuracy: (paper.accuracy)(
+            out.parent().unwrap_or_else(|| Path::new(".")),
+            args.preset,
+        ),
         metric_labels: metric_labels(paper),
     };
     report
-        .write(&args.out)
-        .with_context(|| format!("cannot write the report {}", args.out.display()))?;
+        .write(&out)
+        .with_context(|| format!("cannot write the report {}", out.display()))?;
     print!("{}", report.breakdown());
-    eprintln!("wrote {}", args.out.display());
+    eprintln!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
-fn command(args: &ReproduceArgs) -> String {
+fn command(args: &ReproduceArgs, paper: &Paper) -> String {
     let mut c = format!(
         "repose reproduce --paper {} --preset {}",
-        args.paper, args.preset
+        paper.key, args.preset
     );
     if let Some(n) = args.samples {
         c.push_str(&format!(" --samples {n}"));
@@ -295,15 +327,4 @@ fn metric_labels(paper: &Paper) -> Vec<(String, String)> {
         }
     }
     out
-}
-
-/// What this preset gives up, from the speed/accuracy study's samples
-/// (`speed-vs-accuracy.csv` beside the report), if they are there.
-fn preset_accuracy(out: &Path, preset: Preset) -> Option<String> {
-    let s = preset_shift(&out.with_file_name("speed-vs-accuracy.csv"), preset.name())?;
-    Some(format!(
-        "What the `{preset}` preset gives up, measured against the most accurate settings (Gear-5 at t_c/200) over {} seeds in [speed against accuracy](speed-vs-accuracy.md): \
-         Δθ_R = {:+.2} ± {:.2}° and Δθ_T = {:+.2} ± {:.2}°, at {:.2}× the reference's cost per sample.",
-        s.n, s.theta_r.0, s.theta_r.1, s.theta_t.0, s.theta_t.1, s.cost
-    ))
 }

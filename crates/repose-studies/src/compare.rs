@@ -87,15 +87,19 @@ pub fn verdict(sigma: Option<f64>) -> String {
     }
 }
 
-/// `mean ± sd (n=…)`, or a dash.
+/// `mean ± sd (n=…)`, a fitted constant as `value ± se (se)`, or a dash.
 pub fn fmt_agg(a: Option<Aggregate>) -> String {
     match a {
         Some(Aggregate {
             n,
             mean: Some(m),
             sd,
-            ..
-        }) => format!("{m:.2} ± {:.2} (n={n})", sd.unwrap_or(0.0)),
+            sem,
+        }) => match (sd, sem) {
+            // A fitted constant: its standard error.
+            (None, Some(se)) => format!("{m:.4} ± {se:.4} (se)"),
+            _ => format!("{m:.2} ± {:.2} (n={n})", sd.unwrap_or(0.0)),
+        },
         _ => "—".into(),
     }
 }

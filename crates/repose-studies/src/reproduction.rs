@@ -180,6 +180,7 @@ impl Reproduction {
                 f.caption
             );
         }
+        s.push_str(&self.fits_table());
         s.push_str(&self.points_tables());
         let _ = writeln!(s, "Every number above is in [`{stem}.json`]({stem}.json). Regenerate with `repose reproduce`.");
         s
@@ -189,8 +190,9 @@ impl Reproduction {
         let mut s = String::from("## The paper's numbers against ours\n\n");
         let _ = writeln!(
             s,
-            "Difference is (ours − paper) / √(sem_ours² + sd_paper²/n_paper); |difference| ≤ 2 agrees. \
-             Where the paper does not say how many samples a value rests on, its usual count is assumed.\n"
+            "For a measured value the difference is (ours − paper) / √(sem_ours² + sd_paper²/n_paper), and |difference| ≤ 2 agrees; \
+             where the paper does not say how many samples a value rests on, its usual count is assumed. \
+             For a fitted constant it is (ours − paper) / (our standard error), and the constant agrees when the paper's value lies in our 95 % interval.\n"
         );
         s.push_str("| quantity | paper | ours (mean ± sd, n) | difference | verdict | likely reason |\n|---|---|---|---|---|---|\n");
         for r in &self.comparison {
@@ -207,6 +209,49 @@ impl Reproduction {
                 fmt_agg(r.ours),
                 r.sigma.map_or("—".into(), |x| format!("{x:+.1}σ")),
                 r.reason
+            );
+        }
+        s.push('\n');
+        s
+    }
+
+    /// Every fit drawn on the figures, with its constants.
+    fn fits_table(&self) -> String {
+        let fits: Vec<(&str, &crate::figure::FitData)> = self
+            .figures
+            .iter()
+            .flat_map(|f| f.fits.iter().map(move |x| (f.figure.as_str(), x)))
+            .collect();
+        if fits.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from("## Fits\n\nEach constant with its standard error and 95 % interval (Student's t); R² of the unweighted means.\n\n| figure | fit | constants | R² | points |\n|---|---|---|---|---|\n");
+        for (figure, f) in fits {
+            let (constants, r2, points) = match &f.fit {
+                Some(fit) => (
+                    fit.params
+                        .iter()
+                        .map(|p| {
+                            format!(
+                                "{} = {:.4} ± {:.4} [{:.4}, {:.4}]",
+                                p.name, p.value, p.se, p.lo, p.hi
+                            )
+                        })
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                    format!("{:.4}", fit.r2),
+                    fit.points.to_string(),
+                ),
+                None => (
+                    format!("no fit: {}", f.error.as_deref().unwrap_or("")),
+                    "—".into(),
+                    "—".into(),
+                ),
+            };
+            let _ = writeln!(
+                s,
+                "| {figure} | {} | {constants} | {r2} | {points} |",
+                f.label
             );
         }
         s.push('\n');

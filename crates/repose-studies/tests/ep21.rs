@@ -112,8 +112,9 @@ fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
             r.quantity, r.paper, r.verdict, r.reason
         );
     }
-    // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), θ_r,nc (2), packing (3).
-    assert_eq!(rows.len(), 12);
+    // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), the regime
+    // boundary, θ_r,nc (2), packing (3).
+    assert_eq!(rows.len(), 13);
     let judged: Vec<&str> = rows.iter().map(|r| r.verdict.as_str()).collect();
     // Data made with α = ½ and eq. 1's μ_∞: eq. 4's constants and the free
     // exponent of eq. 2 are fits of another form, judged on their own.
@@ -215,4 +216,39 @@ fn missing_sweeps_leave_figures_empty_and_fits_absent() {
         assert!(!d.missing.is_empty(), "{}", f.key);
     }
     assert!((ep21::PAPER.compare)(&data).is_empty());
+}
+
+#[test]
+fn the_regime_boundary_is_judged_from_where_heaps_formed() {
+    let verdict = |heaps: SweepData| {
+        let rows = (ep21::PAPER.compare)(&study(heaps));
+        let row = rows
+            .iter()
+            .find(|r| r.quantity.starts_with("regime"))
+            .unwrap()
+            .clone();
+        row
+    };
+    // Every size formed a heap, even far below d_c/2: against the paper.
+    let all = verdict(heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5));
+    assert_eq!(all.verdict, "differs", "{all:?}");
+    // No heap below d_c/2 = 25 µm/√g̃ (those runs end without a θ_r).
+    let mut bounded = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
+    for p in &mut bounded.points {
+        let (d, g) = (
+            ep21::d_um(&p.point).unwrap(),
+            ep21::g_tilde(&p.point).unwrap(),
+        );
+        if d < 25.0 / g.sqrt() {
+            p.metrics.clear();
+            p.failures = p.samples;
+        }
+    }
+    let row = verdict(bounded);
+    assert_eq!(row.verdict, "agrees", "{row:?}");
+    assert!(
+        row.reason.contains("g̃ 0.063: heaps from 100 µm"),
+        "{}",
+        row.reason
+    );
 }

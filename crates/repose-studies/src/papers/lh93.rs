@@ -18,7 +18,20 @@ pub static PAPER: Paper = Paper {
     figures,
     compare,
     quantities: &[],
+    report: "reproduction",
+    accuracy,
 };
+
+/// What a preset gives up, from the speed/accuracy study's samples
+/// (`speed-vs-accuracy.csv`), if they are there.
+fn accuracy(docs: &std::path::Path, preset: repose_physics::Preset) -> Option<String> {
+    let s = crate::tradeoff::preset_shift(&docs.join("speed-vs-accuracy.csv"), preset.name())?;
+    Some(format!(
+        "What the `{preset}` preset gives up, measured against the most accurate settings (Gear-5 at t_c/200) over {} seeds in [speed against accuracy](speed-vs-accuracy.md): \
+         Δθ_R = {:+.2} ± {:.2}° and Δθ_T = {:+.2} ± {:.2}°, at {:.2}× the reference's cost per sample.",
+        s.n, s.theta_r.0, s.theta_r.1, s.theta_t.0, s.theta_t.1, s.cost
+    ))
+}
 
 /// θ_R by the three slope methods at μ = 0.2 (10 samples): (metric, mean, sd).
 const METHODS: [(&str, f64, f64); 3] = [

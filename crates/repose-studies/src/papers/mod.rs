@@ -37,6 +37,11 @@ pub struct Paper {
     /// Quantities its figures plot that are computed from a point's axis
     /// values (the Bond number from d and g, say).
     pub quantities: &'static [Quantity],
+    /// The file stem of its reproduction report in `docs/`.
+    pub report: &'static str,
+    /// What a fidelity preset gives up on this paper's scenes, from the
+    /// speed/accuracy study whose files lie in the given folder.
+    pub accuracy: fn(&std::path::Path, Preset) -> Option<String>,
 }
 
 /// A quantity computed from the axis values of a point.

@@ -488,3 +488,43 @@ impl HeapReport {
         s
     }
 }
+
+/// What a preset costs a cohesive heap's θ_r against glass's modulus, and
+/// (for `quick`) a dry heap's against the reference modulus, from the
+/// per-sample CSV of an earlier heap study; in words, for the reports.
+pub fn preset_bias(csv: &Path, preset: &str) -> Option<String> {
+    let mut reader = csv::Reader::from_path(csv).ok()?;
+    let rows: Vec<Sample> = reader
+        .deserialize::<Sample>()
+        .filter_map(Result::ok)
+        .filter(|s| s.status == "completed")
+        .collect();
+    let stats = |setting: &str, f: fn(&Sample) -> Option<f64>| {
+        let v: Vec<f64> = rows
+            .iter()
+            .filter(|s| s.setting == setting)
+            .filter_map(f)
+            .collect();
+        Stats::of(&v)
+    };
+    let glass = "Y 63 GPa (glass)";
+    let cohesive = Shift::between(stats(preset, |s| s.theta_r), stats(glass, |s| s.theta_r))?;
+    let cost =
+        stats(preset, |s| Some(s.wall_time_s))?.mean / stats(glass, |s| Some(s.wall_time_s))?.mean;
+    let mut text = format!(
+        "On a cohesive heap of 1 mm glass beads (Bo = 24, 20 d plate, 1500 grains) the `{preset}` preset stands {:+.1}° ± {:.1}° from glass's 63 GPa at {cost:.2}× its cost per heap",
+        cohesive.delta, cohesive.se
+    );
+    let dry = Shift::between(
+        stats(&format!("{preset}, no cohesion"), |s| s.theta_r),
+        stats("no cohesion", |s| s.theta_r),
+    );
+    if let Some(d) = dry {
+        text.push_str(&format!(
+            "; on the same heap without cohesion {:+.1}° ± {:.1}°",
+            d.delta, d.se
+        ));
+    }
+    text.push_str(" ([speed against accuracy: the poured heap](tradeoff-heap.md)).");
+    Some(text)
+}

@@ -23,6 +23,7 @@ pub fn compare(data: &StudyData) -> Vec<Comparison> {
         rows.extend(eq1_rows(heaps));
         rows.extend(eq2_rows(heaps));
         rows.extend(eq4_rows(heaps));
+        rows.push(regime_row(heaps));
     }
     if let Some(dry) = data.get("dry") {
         rows.extend(dry_rows(dry));
@@ -62,7 +63,7 @@ fn fit_rows(
 fn missing(quantity: String, paper: f64, unit: &str, why: &str) -> Comparison {
     Comparison::statement(
         quantity,
-        format!("{paper} {unit}"),
+        format!("{paper} {unit}").trim_end().to_string(),
         None,
         None,
         false,
@@ -82,7 +83,7 @@ fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize)
     let inside = p.lo <= paper && paper <= p.hi;
     Comparison::statement(
         quantity,
-        format!("{paper} {unit}"),
+        format!("{paper} {unit}").trim_end().to_string(),
         Some(ours),
         sigma,
         inside,
@@ -254,4 +255,74 @@ fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
             ("D_phi_um", "D_φ", D_PHI_UM, "µm"),
         ],
     )
+}
+
+/// The regime boundary: the paper sees no heap below about d_c/2 and
+/// regular heaps above d_c ≈ 50 µm/√g̃. Per gravity level, the smallest
+/// size that formed a heap, and the points that contradict the boundary.
+fn regime_row(heaps: &SweepData) -> Comparison {
+    let mut levels: Vec<(f64, Vec<(f64, bool)>)> = Vec::new();
+    for p in &heaps.points {
+        let (Some(g), Some(d)) = (super::g_tilde(&p.point), super::d_um(&p.point)) else {
+            continue;
+        };
+        let formed = p.metrics.get("theta_r").is_some_and(|a| a.n > 0);
+        match levels.iter_mut().find(|(x, _)| *x == g) {
+            Some((_, v)) => v.push((d, formed)),
+            None => levels.push((g, vec![(d, formed)])),
+        }
+    }
+    levels.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut tested, mut against) = (0, Vec::new());
+    let mut seen = Vec::new();
+    for (g, sizes) in &levels {
+        let dc = 50.0 / g.sqrt();
+        for (d, formed) in sizes {
+            if *d < 0.5 * dc || *d > dc {
+                tested += 1;
+            }
+            if (*d < 0.5 * dc && *formed) || (*d > dc && !*formed) {
+                against.push(format!(
+                    "g̃ {g}: {d} µm {}",
+                    if *formed {
+                        "formed a heap"
+                    } else {
+                        "formed none"
+                    }
+                ));
+            }
+        }
+        let smallest = sizes
+            .iter()
+            .filter(|s| s.1)
+            .map(|s| s.0)
+            .fold(f64::INFINITY, f64::min);
+        seen.push(if smallest.is_finite() {
+            format!("g̃ {g}: heaps from {smallest} µm (d_c = {dc:.0} µm)")
+        } else {
+            format!("g̃ {g}: no heap (d_c = {dc:.0} µm)")
+        });
+    }
+    let reason = if against.is_empty() {
+        seen.join("; ")
+    } else {
+        format!(
+            "{}; against the boundary: {}",
+            seen.join("; "),
+            against.join(", ")
+        )
+    };
+    let row = Comparison::statement(
+        "regime boundary d_c ≈ 50 µm/√g̃",
+        "no heap below about d_c/2, regular heaps above d_c",
+        None,
+        None,
+        against.is_empty(),
+        reason,
+    );
+    if tested == 0 {
+        row.with_verdict("not resolved")
+    } else {
+        row
+    }
 }

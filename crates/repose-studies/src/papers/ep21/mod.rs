@@ -24,6 +24,10 @@ pub static PAPER: Paper = Paper {
     figures: figures::figures,
     compare: compare::compare,
     quantities: &QUANTITIES,
+    report: "reproduction-ep21",
+    accuracy: |docs, preset| {
+        crate::tradeoff::heap::preset_bias(&docs.join("tradeoff-heap.csv"), preset.name())
+    },
 };
 
 /// Earth's gravity, m/s²: g̃ = g / G_EARTH.
@@ -103,7 +107,7 @@ fn values(list: impl IntoIterator<Item = Value>) -> Vec<Value> {
 }
 
 fn diameters(um: &[f64]) -> Vec<Value> {
-    values(um.iter().map(|d| json!(d * 1e-6)))
+    values(um.iter().map(|d| json!(rounded(d * 1e-6))))
 }
 
 fn gravities(levels: &[f64]) -> Vec<Value> {
@@ -125,6 +129,14 @@ fn heap_base(surface_energy: f64, plate: f64, grains: u32) -> Value {
     base
 }
 
+/// The heaps of the reduced study, for tests and previews: a 10 d plate,
+/// 250 grains, and a short settling cap.
+fn reduced_heap(surface_energy: f64) -> Value {
+    let mut base = heap_base(surface_energy, 10.0, 250);
+    base["heap"]["settle_max"] = json!(60.0);
+    base
+}
+
 fn axes(list: Vec<(&str, Vec<Value>)>) -> BTreeMap<String, Vec<Value>> {
     list.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
 }
@@ -143,7 +155,7 @@ fn sweeps() -> Vec<StudySweep> {
             samples: 2,
             priority: 0,
             reduced: Reduced {
-                base: heap_base(SURFACE_ENERGY, 10.0, 250),
+                base: reduced_heap(SURFACE_ENERGY),
                 axes: axes(vec![
                     ("grains.diameter", diameters(&[100.0, 250.0, 1000.0])),
                     ("gravity", gravities(&[0.165, 1.0])),
@@ -165,7 +177,7 @@ fn sweeps() -> Vec<StudySweep> {
             priority: 0,
             reduced: Reduced {
                 base: {
-                    let mut b = heap_base(0.0, 10.0, 250);
+                    let mut b = reduced_heap(0.0);
                     b["grains"]["diameter"] = json!(1e-3);
                     b
                 },
@@ -191,11 +203,11 @@ fn sweeps() -> Vec<StudySweep> {
             reduced: Reduced {
                 base: {
                     let mut b = glass(SURFACE_ENERGY);
-                    b["packing"] = json!({"width": 5.0, "height": 12.0});
+                    b["packing"] = json!({"width": 5.0, "height": 12.0, "settle_max": 60.0});
                     b
                 },
                 axes: axes(vec![
-                    ("grains.diameter", diameters(&[50.0, 400.0])),
+                    ("grains.diameter", diameters(&[100.0, 400.0])),
                     ("gravity", gravities(&[1.0])),
                 ]),
                 samples: 1,
