@@ -694,4 +694,21 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
     assert_eq!(count(tab, "#quarters tr"), 4);
     assert_eq!(count(tab, "#series-phi_z svg polyline.trace"), 1);
     tab.screenshot("ep21-packing.png");
+
+    // The paper's reproduction report, linked from the papers page.
+    tab.visit("/papers");
+    let link = wait_for(
+        tab,
+        "the report link",
+        "document.querySelector('[data-paper=\"ep21\"] a.report') && document.querySelector('[data-paper=\"ep21\"] a.report').getAttribute('href')",
+    );
+    assert_eq!(link, "#/doc/reproduction-ep21");
+    tab.visit("/doc/reproduction-ep21");
+    let title = wait_for(
+        tab,
+        "the second paper's report",
+        "document.querySelector('section.panel h1') && document.querySelector('section.panel h1').textContent",
+    );
+    assert!(title.as_str().unwrap().contains("Elekes"), "{title}");
+    tab.screenshot("ep21-report.png");
 }

@@ -452,7 +452,7 @@ async function papersView() {
   await loadRegistry();
   setView(h("h1", {}, "Papers"),
     ...registry.studies.map(st => h("section", { class: "panel", "data-paper": st.key },
-      h("h2", {}, st.title), h("p", { class: "muted" }, st.citation),
+      h("h2", {}, st.title), h("p", { class: "muted" }, st.citation, " · ", h("a", { href: `#/doc/${st.report}`, class: "report" }, "its reproduction report")),
       h("ul", { class: "figures" }, ...st.figures.map(f => h("li", {},
         h("a", { href: `#/paper/${st.key}/figure/${f.key}` }, `Figure ${f.key}: ${f.title}`),
         h("span", { class: "muted" }, ` — from ${f.sweeps.join(", ")}`)))))));
@@ -598,7 +598,8 @@ async function helpView() {
     h("p", {}, `Fidelity presets (fill_release): ${presetsText()}. What each costs and how far it moves the angles is measured below. The API is described at `,
       h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), "."),
     h("p", {}, "Reports: ",
-      h("a", { href: "#/doc/reproduction" }, "the reproduction of the paper's figures"), " · ",
+      h("a", { href: "#/doc/reproduction" }, "the reproduction of Lee & Herrmann's figures"), " · ",
+      h("a", { href: "#/doc/reproduction-ep21" }, "of Elekes & Parteli's"), " · ",
       h("a", { href: "#/doc/speed-vs-accuracy" }, "speed against accuracy"), " · ",
       h("a", { href: "#/doc/tradeoff-heap" }, "speed against accuracy of the 3D heap"), "."));
   setView(h("h1", {}, "Help"), intro, h("p", { class: "muted" }, "Loading the speed/accuracy report…"));

@@ -299,6 +299,15 @@ const DOCS: &[(&str, &str)] = docs![
     "reproduction-quick-fig7b.svg",
     "reproduction-quick-k_n.svg",
     "reproduction-quick-gamma_n.svg",
+    "reproduction-ep21.md",
+    "reproduction-ep21.json",
+    "reproduction-ep21-fig2.svg",
+    "reproduction-ep21-fig3a.svg",
+    "reproduction-ep21-fig3b.svg",
+    "reproduction-ep21-fig3c.svg",
+    "reproduction-ep21-fig4.svg",
+    "reproduction-ep21-fig5.svg",
+    "reproduction-ep21-regime.svg",
 ];
 
 fn content_type(file: &str) -> &'static str {

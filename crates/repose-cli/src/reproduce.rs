@@ -8,6 +8,7 @@ use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use repose_physics::{protocols, Preset, ENGINE};
 use repose_store::Store;
+use repose_studies::data::{StudyData, SweepData};
 use repose_studies::papers::{self, Paper};
 use repose_studies::reproduction::{DoneSweep, Reproduction};
 use serde_json::{json, Value};
@@ -50,12 +51,19 @@ pub struct ReproduceArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Write a report again from the numbers it saved (its JSON), with the
+    /// current comparison of the paper's results; nothing is run.
+    #[arg(long, value_name = "REPORT.json")]
+    rewrite: Option<PathBuf>,
 }
 
 pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
     init_logging();
     if args.samples == Some(0) {
         bail!("--samples must be at least 1");
+    }
+    if let Some(json) = &args.rewrite {
+        return rewrite(json);
     }
     let chosen: Vec<&'static Paper> = if args.paper == "both" {
         papers::PAPERS.to_vec()
@@ -81,6 +89,38 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
         };
         reproduce_all(&args, &chosen, url.trim_end_matches('/')).await
     })
+}
+
+/// Writes the Markdown (and the JSON) of a saved report again, its
+/// comparison recomputed from the saved points.
+fn rewrite(json: &Path) -> anyhow::Result<ExitCode> {
+    let text = std::fs::read_to_string(json)
+        .with_context(|| format!("--rewrite: cannot read {}", json.display()))?;
+    let mut report: Reproduction = serde_json::from_str(&text)
+        .with_context(|| format!("--rewrite: {} is not a reproduction's JSON", json.display()))?;
+    let Some(paper) = papers::find(&report.paper) else {
+        bail!(
+            "--rewrite: the report is of an unknown paper `{}`",
+            report.paper
+        );
+    };
+    let mut data = StudyData::default();
+    for d in &report.sweeps {
+        let sweep = SweepData {
+            id: d.id.clone(),
+            points: d.points.clone(),
+            samples: Vec::new(),
+            report: None,
+        };
+        data.sweeps.insert(d.key.clone(), sweep);
+    }
+    report.comparison = (paper.compare)(&data);
+    let out = json.with_extension("md");
+    report
+        .write(&out)
+        .with_context(|| format!("cannot write the report {}", out.display()))?;
+    eprintln!("rewrote {}", out.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Reproduces each paper in turn; each report states its own time.

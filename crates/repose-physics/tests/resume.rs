@@ -1,7 +1,7 @@
 //! Checkpoints: a run continued from any of its saved points ends with the
 //! same numbers, bit for bit, as the run that never stopped — for the
-//! poured heap (engine, pour stream and counters) and the packed column
-//! (engine only, on the Gear integrator), across a change of thread count, and a checkpoint that
+//! poured heap (engine, pour stream and counters), the packed column
+//! (engine only, on the Gear integrator) and a 2D free run with friction, across a change of thread count, and a checkpoint that
 //! does not belong to the scene is set aside rather than trusted.
 
 use repose_physics::{run, Checkpoint, Observer, Progress, RunReport, Scene};
@@ -64,6 +64,28 @@ dt_factor = 0.02
 [packing]
 width = 5
 height = 12
+"#;
+
+/// Three 2D grains with friction falling onto a floor and onto each other.
+const FREE_RUN: &str = r#"
+protocol = "free_run"
+gravity = [0.0, -981.0]
+duration = 0.3
+[contact]
+mu = 0.3
+[[particles]]
+position = [0.0, 0.12]
+radius = 0.1
+[[particles]]
+position = [0.15, 0.35]
+radius = 0.1
+[[particles]]
+position = [-0.12, 0.6]
+velocity = [20.0, 0.0]
+radius = 0.1
+[[walls]]
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
 "#;
 
 fn scene(text: &str, extra: &[&str]) -> Scene {
@@ -137,6 +159,11 @@ fn a_heap_resumed_from_any_checkpoint_ends_bit_for_bit_as_the_whole_run() {
 #[cfg_attr(debug_assertions, ignore = "long: run with --release")]
 fn a_packing_resumed_from_a_checkpoint_ends_bit_for_bit_as_the_whole_run() {
     resumes_bit_for_bit(PACKING, 2);
+}
+
+#[test]
+fn a_free_run_resumed_from_a_checkpoint_ends_bit_for_bit_as_the_whole_run() {
+    resumes_bit_for_bit(FREE_RUN, 3);
 }
 
 #[test]

@@ -252,3 +252,23 @@ fn the_regime_boundary_is_judged_from_where_heaps_formed() {
         row.reason
     );
 }
+
+#[test]
+fn a_fit_too_loose_to_test_a_constant_does_not_resolve_it() {
+    // Three heaps on Earth, two of them far off the curve: eq. 1's two
+    // constants are fitted with one degree of freedom and wide intervals.
+    let mut points = Vec::new();
+    for (d, theta) in [(100.0, 40.0), (250.0, 22.0), (1000.0, 31.0)] {
+        let axes = json!({"grains.diameter": d * 1e-6, "gravity": gravity(1.0)});
+        points.push(point(axes, "theta_r", theta, 0.3));
+    }
+    let mut data = StudyData::default();
+    data.sweeps.insert("heaps".into(), sweep(points));
+    let rows = (ep21::PAPER.compare)(&data);
+    let d = rows
+        .iter()
+        .find(|r| r.quantity.starts_with("D_E (eq. 1"))
+        .unwrap();
+    assert_eq!(d.verdict, "not resolved", "{d:?}");
+    assert!(d.reason.contains("wider than the value"), "{}", d.reason);
+}

@@ -111,12 +111,19 @@ where
         let travel = p.max_speed() * duration + 0.5 * sim.gravity.norm() * duration * duration;
         let size = extent(&p.pos, &p.radius, Vector::<D>::zeros()) + travel;
         let mut run = Runner::new(sim, scene, self.observer, CHECK_INTERVAL, size);
-        let outcome = match run.advance(RUN, steps) {
-            Ok(()) => {
+        // The engine is all the state: every check is a resumable point.
+        run.resume::<()>(&[RUN]);
+        let outcome = loop {
+            let done = run.sim.iteration;
+            if done >= steps {
                 let _ = run.sample(RUN);
-                Outcome::Completed
+                break Outcome::Completed;
             }
-            Err(stop) => stop.outcome(RUN, String::new),
+            run.checkpoint(&());
+            let chunk = run.check_steps.min(steps - done);
+            if let Err(stop) = run.advance(RUN, chunk) {
+                break stop.outcome(RUN, String::new);
+            }
         };
         Ok(run.report(outcome, Findings::default()))
     }

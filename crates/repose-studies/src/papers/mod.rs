@@ -107,6 +107,7 @@ impl Paper {
             key: self.key.into(),
             title: self.title.into(),
             citation: self.citation.into(),
+            report: self.report.into(),
             sweeps: (self.sweeps)(),
             figures: (self.figures)()
                 .iter()
@@ -221,6 +222,8 @@ pub struct PaperSummary {
     pub key: String,
     pub title: String,
     pub citation: String,
+    /// Its reproduction report, served at `/docs/<report>.md`.
+    pub report: String,
     pub sweeps: Vec<StudySweep>,
     pub figures: Vec<FigureSummary>,
 }

@@ -493,19 +493,9 @@ impl HeapReport {
 /// (for `quick`) a dry heap's against the reference modulus, from the
 /// per-sample CSV of an earlier heap study; in words, for the reports.
 pub fn preset_bias(csv: &Path, preset: &str) -> Option<String> {
-    let mut reader = csv::Reader::from_path(csv).ok()?;
-    let rows: Vec<Sample> = reader
-        .deserialize::<Sample>()
-        .filter_map(Result::ok)
-        .filter(|s| s.status == "completed")
-        .collect();
+    let rows: Vec<Sample> = super::completed_rows(csv, |s: &Sample| s.status == "completed")?;
     let stats = |setting: &str, f: fn(&Sample) -> Option<f64>| {
-        let v: Vec<f64> = rows
-            .iter()
-            .filter(|s| s.setting == setting)
-            .filter_map(f)
-            .collect();
-        Stats::of(&v)
+        super::setting_stats(&rows, |s| s.setting == setting, f)
     };
     let glass = "Y 63 GPa (glass)";
     let cohesive = Shift::between(stats(preset, |s| s.theta_r), stats(glass, |s| s.theta_r))?;

@@ -987,19 +987,9 @@ pub struct PresetShift {
 /// The shifts of `preset` from the reference in the per-sample CSV of an
 /// earlier study, if it has both.
 pub fn preset_shift(csv: &Path, preset: &str) -> Option<PresetShift> {
-    let mut reader = csv::Reader::from_path(csv).ok()?;
-    let rows: Vec<Sample> = reader
-        .deserialize::<Sample>()
-        .filter_map(Result::ok)
-        .filter(|s| s.status == "completed")
-        .collect();
+    let rows: Vec<Sample> = completed_rows(csv, |s: &Sample| s.status == "completed")?;
     let of = |setting: &str, f: fn(&Sample) -> Option<f64>| {
-        let v: Vec<f64> = rows
-            .iter()
-            .filter(|s| s.setting == setting)
-            .filter_map(f)
-            .collect();
-        Stats::of(&v)
+        setting_stats(&rows, |s| s.setting == setting, f)
     };
     let shift = |f: fn(&Sample) -> Option<f64>| {
         let (a, r) = (of(preset, f)?, of("reference", f)?);
@@ -1019,6 +1009,36 @@ pub fn preset_shift(csv: &Path, preset: &str) -> Option<PresetShift> {
         theta_t: (dt, set),
         cost,
     })
+}
+
+/// The rows of a study's per-sample CSV that `keep` accepts (completed
+/// runs), or none if the file cannot be read.
+pub(crate) fn completed_rows<T: serde::de::DeserializeOwned>(
+    csv: &Path,
+    keep: fn(&T) -> bool,
+) -> Option<Vec<T>> {
+    let mut reader = csv::Reader::from_path(csv).ok()?;
+    Some(
+        reader
+            .deserialize::<T>()
+            .filter_map(Result::ok)
+            .filter(keep)
+            .collect(),
+    )
+}
+
+/// Statistics of `f` over the rows of one setting.
+pub(crate) fn setting_stats<T>(
+    rows: &[T],
+    of_setting: impl Fn(&T) -> bool,
+    f: fn(&T) -> Option<f64>,
+) -> Option<Stats> {
+    let v: Vec<f64> = rows
+        .iter()
+        .filter(|r| of_setting(r))
+        .filter_map(f)
+        .collect();
+    Stats::of(&v)
 }
 
 impl Report {

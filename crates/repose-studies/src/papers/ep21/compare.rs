@@ -72,6 +72,9 @@ fn missing(quantity: String, paper: f64, unit: &str, why: &str) -> Comparison {
     .with_verdict("no result")
 }
 
+/// A fitted constant against the paper's: it agrees when the paper's value
+/// lies in our 95 % interval, differs when it lies outside, and is not
+/// resolved when our interval is wider than the paper's value itself.
 fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize) -> Comparison {
     let ours = Aggregate {
         n: i64::try_from(points).unwrap_or(i64::MAX),
@@ -81,25 +84,29 @@ fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize)
     };
     let sigma = (p.se > 0.0).then(|| (p.value - paper) / p.se);
     let inside = p.lo <= paper && paper <= p.hi;
-    Comparison::statement(
+    let wide = 0.5 * (p.hi - p.lo) > paper.abs();
+    let interval = format!(
+        "ours {:.4} ± {:.4} {unit}, 95 % interval [{:.4}, {:.4}]",
+        p.value, p.se, p.lo, p.hi
+    );
+    let reason = match (inside, wide) {
+        (true, true) => format!("{interval}: wider than the value itself, so it tests nothing"),
+        (true, false) => interval,
+        (false, _) => format!("{interval}; {FIT_DIFFERS}"),
+    };
+    let row = Comparison::statement(
         quantity,
         format!("{paper} {unit}").trim_end().to_string(),
         Some(ours),
         sigma,
         inside,
-        format!(
-            "ours {:.4} ± {:.4} {unit}, 95 % interval [{:.4}, {:.4}]{}",
-            p.value,
-            p.se,
-            p.lo,
-            p.hi,
-            if inside {
-                String::new()
-            } else {
-                format!("; {FIT_DIFFERS}")
-            }
-        ),
-    )
+        reason,
+    );
+    if inside && wide {
+        row.with_verdict("not resolved")
+    } else {
+        row
+    }
 }
 
 fn earth(d: &SweepData) -> Vec<Datum> {
