@@ -154,7 +154,7 @@ impl Page {
     fn evaluate(&mut self, expression: &str) -> Value {
         let r = self.command(
             "Runtime.evaluate",
-            json!({"expression": expression, "returnByValue": true}),
+            json!({"expression": expression, "returnByValue": true, "awaitPromise": true}),
         );
         r["result"]["value"].clone()
     }
@@ -616,30 +616,46 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
         "document.querySelector('[data-paper=\"ep21\"] ul li a')",
     );
     assert_eq!(count(tab, "[data-paper=\"ep21\"] ul li a"), 7);
-    // (figure, fitted curves at least, fit rows, flagged points at least)
+    // (figure, fits it makes at least): what the reduced study draws
+    // depends on which small heaps settle, so each figure is checked
+    // against the figure data the API serves it.
     let expected = [
-        ("2", 1, 1, 0),
-        ("3a", 1, 2, 1),
-        ("3b", 0, 0, 0),
-        ("3c", 1, 2, 0),
-        ("4", 1, 1, 1),
-        ("5", 0, 1, 0),
-        ("regime", 0, 0, 1),
+        ("2", 1),
+        ("3a", 1),
+        ("3b", 0),
+        ("3c", 2),
+        ("4", 1),
+        ("5", 1),
+        ("regime", 0),
     ];
-    for (fig, curves, rows, flagged) in expected {
+    for (fig, fits) in expected {
         tab.visit(&format!("/paper/ep21/figure/{fig}"));
         wait_for(
             tab,
             &format!("ep21 figure {fig}"),
             "document.querySelector('#figure-plot svg') && document.querySelectorAll('#figure-plot svg circle.mean').length",
         );
-        assert!(
-            count(tab, "#figure-plot svg polyline.fit") >= curves,
+        let served = tab.evaluate(&format!(
+            "(async () => {{ const f = await (await fetch('/api/studies/ep21/figures/{fig}')).json(); \
+             return [f.fits.length, f.fits.filter(x => x.fit).length, \
+             f.series.filter(s => s.kind === 'measured').flatMap(s => s.points).filter(p => p.flag && Number.isFinite(p.y)).length]; }})()"
+        ));
+        let n = |k: usize| served[k].as_u64().unwrap();
+        assert!(n(0) >= fits, "figure {fig}: {served}");
+        assert_eq!(count(tab, "#fits tbody tr"), n(0), "figure {fig}");
+        assert_eq!(
+            count(tab, "#fits tbody tr.failed"),
+            n(0) - n(1),
             "figure {fig}"
         );
-        assert_eq!(count(tab, "#fits tbody tr"), rows, "figure {fig}");
-        assert!(
-            count(tab, "#figure-plot svg circle.flagged") >= flagged,
+        assert_eq!(
+            count(tab, "#figure-plot svg polyline.fit"),
+            n(1),
+            "figure {fig}"
+        );
+        assert_eq!(
+            count(tab, "#figure-plot svg circle.flagged"),
+            n(2),
             "figure {fig}"
         );
         tab.screenshot(&format!("ep21-figure-{fig}.png"));
@@ -655,21 +671,21 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
     let drawn = wait_for(
         tab,
         "the heap in 3D",
-        "document.querySelector('#heap3d') && document.querySelector('#heap3d').dataset.drawn",
+        "document.querySelector('#grains3d') && document.querySelector('#grains3d').dataset.drawn",
     );
     assert!(drawn.as_str().unwrap().parse::<u64>().unwrap() > 10);
-    let yaw = tab.evaluate("document.querySelector('#heap3d').dataset.yaw");
+    let yaw = tab.evaluate("document.querySelector('#grains3d').dataset.yaw");
     tab.evaluate(
-        "document.querySelector('#heap3d').dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight'}))",
+        "document.querySelector('#grains3d').dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight'}))",
     );
     assert_ne!(
-        tab.evaluate("document.querySelector('#heap3d').dataset.yaw"),
+        tab.evaluate("document.querySelector('#grains3d').dataset.yaw"),
         yaw,
         "the arrow key turns the heap"
     );
     // The canvas holds the heap's colours, not only the white background.
     let coloured = tab.evaluate(
-        "(() => { const c = document.querySelector('#heap3d'); const gl = c.getContext('webgl'); \
+        "(() => { const c = document.querySelector('#grains3d'); const gl = c.getContext('webgl'); \
          const px = new Uint8Array(c.width * c.height * 4); gl.readPixels(0, 0, c.width, c.height, gl.RGBA, gl.UNSIGNED_BYTE, px); \
          let n = 0; for (let i = 0; i < px.length; i += 4) if (px[i] < 200 || px[i + 2] < 200) n++; return n; })()",
     );
@@ -704,11 +720,11 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
     );
     assert_eq!(link, "#/doc/reproduction-ep21");
     tab.visit("/doc/reproduction-ep21");
-    let title = wait_for(
+    wait_for(
         tab,
         "the second paper's report",
-        "document.querySelector('section.panel h1') && document.querySelector('section.panel h1').textContent",
+        "document.querySelector('.doc') && document.querySelector('.doc').textContent.includes('Reproduction of Elekes')",
     );
-    assert!(title.as_str().unwrap().contains("Elekes"), "{title}");
+    assert!(count(tab, ".doc img") >= 7, "the report's figures");
     tab.screenshot("ep21-report.png");
 }

@@ -431,7 +431,7 @@ function figurePanel(fig, name, sweepId) {
 // interval, or why the fit could not be made.
 function fitsTable(fits) {
   if (!fits.length) return "";
-  const constants = f => f.fit ? f.fit.params.map(p => `${p.name} = ${fmt(p.value, 4)} ± ${fmt(p.se, 2)} [${fmt(p.lo, 4)}, ${fmt(p.hi, 4)}]`).join("; ") : f.error;
+  const constants = f => f.fit ? f.fit.params.map(p => `${p.name} = ${fmt(p.value, 4)} ± ${fmt(p.se, 4)} [${fmt(p.lo, 4)}, ${fmt(p.hi, 4)}]`).join("; ") : f.error;
   return h("table", { id: "fits" },
     h("thead", {}, h("tr", {}, h("th", {}, "fit"), h("th", {}, "constants ± standard error [95 % interval]"), h("th", {}, "R²"), h("th", {}, "points"))),
     h("tbody", {}, ...fits.map(f => h("tr", { class: f.fit ? "fit" : "fit failed" },
@@ -513,31 +513,47 @@ function curves(rep) {
     c.band ? h("p", { class: "muted" }, `Band: ${fmt(c.band.mean)} ± ${fmt(c.band.hi - c.band.mean)} (mean ± sd).`) : ""));
 }
 
+// A 3D sample's grains in 3D, to turn and zoom.
+function grains3d(rep, title) {
+  const grains = (rep.final_state || { grains: [] }).grains;
+  const canvas = h("canvas", { id: "grains3d", width: 760, height: 460, tabindex: "0",
+    "aria-label": `${title} in 3D: drag or use the arrow keys to turn it, the wheel or + and − to zoom` });
+  const panels = [h("h2", {}, `${title}: ${grains.length} grains`), canvas,
+    h("p", { class: "muted" }, "Drag or use the arrow keys to turn it; the wheel or + and − zoom. Colour: height.")];
+  const after = () => { if (!window.heap3d.viewer(canvas, grains)) canvas.replaceWith(h("p", { class: "muted" }, "WebGL is not available in this browser.")); };
+  return { panels, after };
+}
+
 // A poured heap: the heap in 3D, and its two side views with the
 // equal-area triangles that give θ_r.
 function heapPanels(rep) {
-  const grains = (rep.final_state || { grains: [] }).grains;
-  const canvas = h("canvas", { id: "heap3d", width: 760, height: 460, tabindex: "0",
-    "aria-label": "the heap in 3D: drag or use the arrow keys to turn it, the wheel or + and − to zoom" });
+  const three = grains3d(rep, "The heap");
   const views = (rep.details && rep.details.side_views) || {};
   const d = rep.scene.grains.diameter, plate = rep.scene.heap.plate;
   const sides = (rep.profiles || []).map((profile, k) => {
     const label = k === 0 ? "xz" : "yz", view = views[label];
     return view ? h("div", { class: "figure", id: `side-${label}` }, sideViewPlot({ profile, d, plate, view, label })) : "";
   });
-  const panels = [h("h2", {}, `The heap: ${grains.length} grains`), canvas,
-    h("p", { class: "muted", id: "heap3d-help" }, "Drag or use the arrow keys to turn it; the wheel or + and − zoom. Colour: height."),
-    h("h2", {}, "Side views"), h("div", { class: "two" }, ...sides)];
-  return { panels, after: () => { if (!window.heap3d.viewer(canvas, grains)) canvas.replaceWith(h("p", { class: "muted" }, "WebGL is not available in this browser.")); } };
+  return { panels: [...three.panels, h("h2", {}, "Side views"), h("div", { class: "two" }, ...sides)], after: three.after };
 }
 
-// A packed column: φ in each of the four sub-columns of the slab.
+// A packed column: φ in each of the four sub-columns of the slab, and the
+// column in 3D.
 function packingPanels(rep) {
   const det = rep.details || {};
   const quarters = det.quarters || [];
   const rows = quarters.map((phi, k) => h("tr", {}, h("th", {}, `sub-column ${k + 1}`), h("td", { class: "num" }, fmt(phi, 4))));
   const slab = det.slab ? `between ${fmt(det.slab[0], 3)} d and ${fmt(det.slab[1], 3)} d` : "";
-  return { panels: [h("h2", {}, `Packing fraction of the four sub-columns ${slab}`), h("table", { id: "quarters" }, h("tbody", {}, ...rows))], after: () => {} };
+  const three = grains3d(rep, "The column");
+  return { panels: [h("h2", {}, `Packing fraction of the four sub-columns ${slab}`), h("table", { id: "quarters" }, h("tbody", {}, ...rows)), ...three.panels], after: three.after };
+}
+
+// What a sample page shows beyond the common panels, by protocol.
+function specialPanels(rep) {
+  if (!rep.final_state || rep.dimension !== 3) return { panels: [], after: () => {} };
+  if (rep.protocol === "heap") return heapPanels(rep);
+  if (rep.protocol === "packing") return packingPanels(rep);
+  return grains3d(rep, "The grains");
 }
 
 async function sampleView(hash) {
@@ -553,9 +569,8 @@ async function sampleView(hash) {
   const physics = Object.entries(rep.options.physics || {}).map(([k, v]) => `, ${k.replace(/_/g, " ")} ${v}`).join("");
   const sceneText = JSON.stringify(rep.scene, null, 2);
   const copied = h("span", { class: "muted", "aria-live": "polite" });
-  const special = rep.protocol === "heap" && rep.final_state ? heapPanels(rep)
-    : rep.protocol === "packing" ? packingPanels(rep) : { panels: [], after: () => {} };
-  const pile = rep.protocol === "heap" ? [] : [h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"),
+  const special = specialPanels(rep);
+  const pile = rep.dimension === 3 ? [] : [h("h2", {}, rep.outcome.status === "completed" ? "Final pile, force chains (fig. 1a)" : "Grains when the run stopped, force chains"),
     h("div", { class: "figure", id: "pile" }, pileFigure(rep))];
   setView(
     h("h1", {}, `Sample: ${rep.protocol}, seed ${rep.seed}`),
