@@ -53,9 +53,15 @@ pub async fn top_up(store: &Store, sweep_id: &str, max_attempts: i64) -> Result<
         return Ok(0);
     }
     let max = spec.max_samples_per_point() as i64;
+    // Jobs first, then the statistics: a point seen with no job pending
+    // had every result stored before, so the statistics read after it
+    // include them all (read the other way round, a result stored in
+    // between would leave stale statistics beside a finished point, and a
+    // sample would be added for nothing).
+    let point_jobs = store.point_jobs(sweep_id).await?;
     let points = store.points(sweep_id).await?;
     let mut added = 0;
-    for pj in store.point_jobs(sweep_id).await? {
+    for pj in point_jobs {
         if pj.pending > 0 {
             continue;
         }
