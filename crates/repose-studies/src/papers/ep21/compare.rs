@@ -8,11 +8,10 @@ use super::curves::{
 };
 use super::figures::d_by_gravity;
 use crate::compare::{weighted_slope, Comparison};
-use crate::data::{same, StudyData, SweepData};
+use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Datum, Fit, Param};
 use crate::fitted::Along;
 use repose_store::{Aggregate, Point};
-use serde_json::Value;
 
 const FIT_DIFFERS: &str =
     "the paper's value lies outside our 95 % interval: see the fidelity section (softened stiffness, heap size)";
@@ -110,13 +109,7 @@ fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize)
 }
 
 fn earth(d: &SweepData) -> Vec<Datum> {
-    let mut on_earth = d.clone();
-    on_earth.points.retain(|p| {
-        same(
-            Some(&Value::from(super::g_tilde(&p.point).unwrap_or(0.0))),
-            1.0,
-        )
-    });
+    let on_earth = super::figures::on_earth(d);
     let along = Along {
         x: "ep21.d_um",
         by: None,

@@ -53,7 +53,7 @@ fn flag_regime(series: &mut [SeriesData], bo: impl Fn(f64, Option<&Value>) -> Op
 }
 
 /// The sweep's points at Earth's gravity only.
-fn on_earth(d: &SweepData) -> SweepData {
+pub(super) fn on_earth(d: &SweepData) -> SweepData {
     let mut earth = d.clone();
     earth.points.retain(|p| {
         same(
