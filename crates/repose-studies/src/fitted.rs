@@ -97,11 +97,28 @@ impl Along<'_> {
         out.sort_by(|a, b| key(&a.0).total_cmp(&key(&b.0)));
         for (_, data) in &mut out {
             data.sort_by(|a, b| a.x.total_cmp(&b.x));
-            if data.iter().any(|d| d.sigma.is_none()) {
-                data.iter_mut().for_each(|d| d.sigma = None);
-            }
+            weights_all_or_none(data);
         }
         out
+    }
+
+    /// Every point's mean of `y` along `x`, as one group.
+    pub fn means(x: &str, y: &str, d: &SweepData) -> Vec<Datum> {
+        let along = Along {
+            x,
+            by: None,
+            y,
+            keep: |_| true,
+        };
+        along.groups(d).pop().map(|g| g.1).unwrap_or_default()
+    }
+}
+
+/// Weights only where every point has one: a fit of some weighted and
+/// some unweighted points would weigh them on different scales.
+pub fn weights_all_or_none(data: &mut [Datum]) {
+    if data.iter().any(|d| d.sigma.is_none()) {
+        data.iter_mut().for_each(|d| d.sigma = None);
     }
 }
 

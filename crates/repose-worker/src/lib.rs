@@ -9,7 +9,7 @@
 //! so no job is ever left half-written: either its result and its `done`
 //! state are written together, or the job returns to the queue.
 //!
-//! A long sample (a heap or a packing) saves a checkpoint every
+//! A long sample (a heap, a packing or a free run) saves a checkpoint every
 //! `checkpoint_every` while it runs; the worker writes it to the store
 //! under its lease. A worker that claims a job with a checkpoint (its
 //! first worker died) continues from it, and the result is the one the

@@ -6,12 +6,12 @@ use super::curves::{
     ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ2_HALF, EQ4, MU_INF, MU_INF_BOND,
     PACKING, PHI_C, PHI_INF,
 };
-use super::figures::d_by_gravity;
+use super::figures::{d_by_gravity, d_data, on_earth};
 use crate::compare::{weighted_slope, Comparison};
 use crate::data::{StudyData, SweepData};
-use crate::fit::{fit, Datum, Fit, Param};
+use crate::fit::{fit, Fit, Param};
 use crate::fitted::Along;
-use repose_store::{Aggregate, Point};
+use repose_store::Aggregate;
 
 const FIT_DIFFERS: &str =
     "the paper's value lies outside our 95 % interval: see the fidelity section (softened stiffness, heap size)";
@@ -31,10 +31,6 @@ pub fn compare(data: &StudyData) -> Vec<Comparison> {
         rows.extend(packing_rows(packing));
     }
     rows
-}
-
-fn every(_: &Point) -> bool {
-    true
 }
 
 /// One row per constant of a fit (or a "no result" row per constant
@@ -108,23 +104,9 @@ fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize)
     }
 }
 
-fn earth(d: &SweepData) -> Vec<Datum> {
-    let on_earth = super::figures::on_earth(d);
-    let along = Along {
-        x: "ep21.d_um",
-        by: None,
-        y: "theta_r",
-        keep: every,
-    };
-    along
-        .groups(&on_earth)
-        .pop()
-        .map(|g| g.1)
-        .unwrap_or_default()
-}
-
 fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let result = fit(&EQ1, &earth(heaps), &[0.45, 80.0]).map_err(|e| e.to_string());
+    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps));
+    let result = fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string());
     fit_rows(
         "eq. 1 on Earth",
         result,
@@ -136,24 +118,7 @@ fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let data: Vec<Datum> = d_by_gravity(heaps)
-        .into_iter()
-        .filter_map(|(g, f)| {
-            let (v, se) = f.ok()?;
-            Some(Datum {
-                x: g,
-                y: v,
-                sigma: (se > 0.0).then_some(se),
-            })
-        })
-        .collect();
-    let data: Vec<Datum> = if data.iter().any(|d| d.sigma.is_none()) {
-        data.into_iter()
-            .map(|d| Datum { sigma: None, ..d })
-            .collect()
-    } else {
-        data
-    };
+    let data = d_data(&d_by_gravity(heaps));
     let free = fit(&EQ2, &data, &[80.0, 0.5]).map_err(|e| e.to_string());
     let half = fit(&EQ2_HALF, &data, &[80.0]).map_err(|e| e.to_string());
     let mut rows = fit_rows(
@@ -170,13 +135,7 @@ fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let along = Along {
-        x: "ep21.bond",
-        by: None,
-        y: "theta_r",
-        keep: every,
-    };
-    let data = along.groups(heaps).pop().map(|g| g.1).unwrap_or_default();
+    let data = Along::means("ep21.bond", "theta_r", heaps);
     let result = fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string());
     fit_rows(
         "eq. 4",
@@ -238,13 +197,7 @@ fn dry_rows(dry: &SweepData) -> Vec<Comparison> {
 }
 
 fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
-    let along = Along {
-        x: "ep21.d_sqrt_g_um",
-        by: None,
-        y: "packing_fraction",
-        keep: every,
-    };
-    let data = along.groups(packing).pop().map(|g| g.1).unwrap_or_default();
+    let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing);
     let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
     fit_rows(
         "packing fit",

@@ -6,10 +6,10 @@ use super::curves::{
     MU_INF_BOND, PACKING, PHI_C, PHI_INF,
 };
 use super::{BOND_REGIME_I, DENSITY, G_EARTH, SURFACE_ENERGY};
-use crate::data::{same, SweepData};
+use crate::data::SweepData;
 use crate::figure::{measured, FitData, Kind, PlotPoint, SeriesData};
 use crate::fit::Datum;
-use crate::fitted::{fitted, Along};
+use crate::fitted::{fitted, weights_all_or_none, Along};
 use crate::papers::{Figure, Layer};
 use repose_store::Point;
 use serde_json::Value;
@@ -55,12 +55,10 @@ fn flag_regime(series: &mut [SeriesData], bo: impl Fn(f64, Option<&Value>) -> Op
 /// The sweep's points at Earth's gravity only.
 pub(super) fn on_earth(d: &SweepData) -> SweepData {
     let mut earth = d.clone();
-    earth.points.retain(|p| {
-        same(
-            Some(&Value::from(super::g_tilde(&p.point).unwrap_or(0.0))),
-            1.0,
-        )
-    });
+    // g̃ is rounded to nine digits, so Earth's reads back as exactly 1.
+    earth
+        .points
+        .retain(|p| super::g_tilde(&p.point) == Some(1.0));
     earth
 }
 
@@ -69,13 +67,7 @@ fn earth_heaps(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
     let earth = on_earth(d);
     let mut series = measured(&earth, D, None, THETA, "ours, g̃ = 1");
     flag_regime(&mut series, |x, _| Some(bond_at(x, 1.0)));
-    let along = Along {
-        x: D,
-        by: None,
-        y: "theta_r",
-        keep: every,
-    };
-    let data = along.groups(&earth).pop().map(|g| g.1).unwrap_or_default();
+    let data = Along::means(D, "theta_r", &earth);
     let fit = fitted(
         &EQ1,
         &[0.45, 80.0],
@@ -109,17 +101,26 @@ fn fig2() -> Figure {
     }
 }
 
-/// θ_r of the heaps along `x`, one series per gravity, regime I marked.
-fn heaps_along(d: &SweepData, x: &'static str) -> Vec<SeriesData> {
-    let mut series = measured(d, x, Some(G), THETA, "g̃");
-    let on_bond = x == "ep21.bond";
-    flag_regime(&mut series, |x, g| {
-        if on_bond {
-            Some(x)
-        } else {
-            Some(bond_at(x, g?.as_f64()?))
-        }
-    });
+/// The Bond number of a point plotted at d (µm) in the series of g̃.
+fn bond_of_d(x: f64, g: Option<&Value>) -> Option<f64> {
+    Some(bond_at(x, g?.as_f64()?))
+}
+
+/// The Bond number of a point plotted at Bo.
+fn bond_of_bond(x: f64, _: Option<&Value>) -> Option<f64> {
+    Some(x)
+}
+
+/// A metric of the heaps along `x`, one series per gravity, regime I
+/// marked by the Bond number `bo` of each plotted point.
+fn heaps_along(
+    d: &SweepData,
+    x: &'static str,
+    y: &'static [&'static str],
+    bo: fn(f64, Option<&Value>) -> Option<f64>,
+) -> Vec<SeriesData> {
+    let mut series = measured(d, x, Some(G), y, "g̃");
+    flag_regime(&mut series, bo);
     series
 }
 
@@ -134,7 +135,7 @@ fn fig3a() -> Figure {
         layers: vec![
             Layer::Computed {
                 sweep: "heaps",
-                f: |d| (heaps_along(d, D), Vec::new()),
+                f: |d| (heaps_along(d, D, THETA, bond_of_d), Vec::new()),
             },
             Layer::Fit {
                 sweep: "heaps",
@@ -199,6 +200,25 @@ pub fn d_by_gravity(d: &SweepData) -> Vec<(f64, FittedD)> {
         .collect()
 }
 
+/// The fitted D against g̃, weighted by their standard errors where every
+/// level has one: what eq. 2 is fitted to, on the figure and in the
+/// comparison alike.
+pub fn d_data(found: &[(f64, FittedD)]) -> Vec<Datum> {
+    let mut data: Vec<Datum> = found
+        .iter()
+        .filter_map(|(g, f)| {
+            let (v, se) = f.as_ref().ok()?;
+            Some(Datum {
+                x: *g,
+                y: *v,
+                sigma: (*se > 0.0).then_some(*se),
+            })
+        })
+        .collect();
+    weights_all_or_none(&mut data);
+    data
+}
+
 /// Fig. 3C: D against g̃ with eq. 2 fitted free and with the exponent ½.
 fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
     let found = d_by_gravity(d);
@@ -213,16 +233,7 @@ fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
             })
         })
         .collect();
-    let data: Vec<Datum> = points
-        .iter()
-        .filter_map(|p| {
-            Some(Datum {
-                x: p.x,
-                y: p.y?,
-                sigma: p.sem.filter(|s| *s > 0.0),
-            })
-        })
-        .collect();
+    let data = d_data(&found);
     let mut series = vec![SeriesData {
         name: "D fitted at each g̃ (eq. 1, μ_∞ = 0.447)".into(),
         kind: Kind::Measured,
@@ -283,7 +294,7 @@ fn fig4() -> Figure {
         layers: vec![
             Layer::Computed {
                 sweep: "heaps",
-                f: |d| (heaps_along(d, "ep21.bond"), Vec::new()),
+                f: |d| (heaps_along(d, "ep21.bond", THETA, bond_of_bond), Vec::new()),
             },
             Layer::Fit {
                 sweep: "heaps",
@@ -348,8 +359,7 @@ fn regime() -> Figure {
         layers: vec![Layer::Computed {
             sweep: "heaps",
             f: |d| {
-                let mut s = measured(d, D, Some(G), &["surface_roughness"], "g̃");
-                flag_regime(&mut s, |x, g| Some(bond_at(x, g?.as_f64()?)));
+                let s = heaps_along(d, D, &["surface_roughness"], bond_of_d);
                 (s, Vec::new())
             },
         }],
