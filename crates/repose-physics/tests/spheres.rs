@@ -300,6 +300,49 @@ fn spheres_released_just_inside_the_range_close_the_gap_and_stick() {
     assert!(gap < 0.0, "{gap}");
 }
 
+/// Two touching spheres that do not rotate, pressed together by `press`
+/// and sheared sideways by `shear` (opposite on each); how far they have
+/// slid past each other after `duration`.
+fn sheared_pair(limit_load: &str, press: f64, shear: f64, duration: f64) -> f64 {
+    let load = format!("material.limit_load=\"{limit_load}\"");
+    let p = parts(&["material.youngs_modulus=1e8", &load]);
+    let grains = [
+        (Vector::<3>::new(-0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
+        (Vector::<3>::new(0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
+    ];
+    let dt = collision_time(&p.0, 0.1) / 100.0;
+    let mut s: Simulation<3, Law<NoRolling, VanDerWaals, false>, VelocityVerlet> =
+        sim(p, &grains, vec![], Vector::<3>::zeros(), dt);
+    s.particles
+        .set_load(0, Vector::<3>::new(press, -shear, 0.0));
+    s.particles
+        .set_load(1, Vector::<3>::new(-press, shear, 0.0));
+    s.run((duration / dt) as u64).unwrap();
+    s.particles.pos[1].y - s.particles.pos[0].y
+}
+
+#[test]
+fn the_attraction_raises_the_sliding_limit_unless_the_limits_see_the_net_force() {
+    // In contact the attraction is π γ d; at rest the repulsion balances it
+    // plus whatever presses the pair together.
+    let attraction = std::f64::consts::PI * 0.05 * D;
+    let mu = 0.5;
+    let held = |load: &str, press: f64, shear: f64| {
+        let slid = sheared_pair(load, press, shear, 5e-3);
+        println!("limits on the {load} force, pressed {press:.2e} N, sheared {shear:.2e} N: slid {slid:.2e} m");
+        slid.abs() < 1e-3 * D
+    };
+    // Eq. 11 as printed: the limit is μ (π γ d + press).
+    assert!(held("contact", 0.0, 0.9 * mu * attraction));
+    assert!(!held("contact", 0.0, 1.1 * mu * attraction));
+    // Net force: the attraction holds the pair together but adds no
+    // friction; only the outer pressure does, μ press.
+    let press = 0.2 * attraction;
+    assert!(!held("net", 0.0, 0.1 * mu * attraction));
+    assert!(held("net", press, 0.9 * mu * press));
+    assert!(!held("net", press, 1.1 * mu * press));
+}
+
 /// Eight spheres in free space with random velocities and spins, colliding.
 fn cloud<R: FromParts + RollingLaw<3>, const ROT: bool>(
     parts: (Parts, Parts),

@@ -9,6 +9,9 @@ use crate::dim::{Dim, Space};
 /// grow with the overlap). `A_H = 24π D_min² γ` for a surface energy `γ`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VanDerWaals {
+    /// Whether the sliding and rolling limits scale with the net normal
+    /// force (repulsion less attraction) rather than the repulsion alone.
+    pub net_limits: bool,
     /// Hamaker constant `A_H`, J.
     pub hamaker: f64,
     /// Cut-off of the attraction at contact, `D_min`, m.
@@ -50,6 +53,15 @@ where
         self.at(touch.r_eff, -touch.overlap)
     }
 
+    #[inline(always)]
+    fn limit_load(&self, touch: &Touch<D>, repulsion: f64) -> f64 {
+        if self.net_limits {
+            (repulsion - self.attraction(touch)).max(0.0)
+        } else {
+            repulsion
+        }
+    }
+
     /// `∫ F ds` across the gap, `A_H R (1/D_min − 1/(D_max + D_min)) / 6`,
     /// plus the constant contact value times the depth.
     fn work(&self, r_eff: f64, depth: f64) -> f64 {
@@ -68,6 +80,7 @@ mod tests {
         let a = VanDerWaals::hamaker_of(0.05, 1.65e-10);
         assert!((a - 1.026e-19).abs() < 1e-22, "{a}");
         let law = VanDerWaals {
+            net_limits: false,
             hamaker: a,
             d_min: 1.65e-10,
             d_max: 1e-6,

@@ -180,6 +180,14 @@ where
     /// Work the attraction does on a pair of effective radius `r_eff`
     /// brought from out of its range to an overlap `depth`.
     fn work(&self, r_eff: f64, depth: f64) -> f64;
+
+    /// The normal force that bounds sliding and rolling (the Coulomb and
+    /// the rolling limit) for a contact whose repulsive force is `repulsion`:
+    /// that force itself unless the law says otherwise.
+    #[inline(always)]
+    fn limit_load(&self, _touch: &Touch<D>, repulsion: f64) -> f64 {
+        repulsion
+    }
 }
 
 /// No rolling resistance.
@@ -313,7 +321,12 @@ where
         let vn = v.dot(&n);
         let fn_ = self.normal.force(touch, vn);
         let vt = <Dim<D> as Space<D>>::tangential(&v, &n);
-        let ft = self.tangential.force(&mut history.0, vt, touch, fn_, dt);
+        let load = if C::ACTIVE {
+            self.cohesion.limit_load(touch, fn_)
+        } else {
+            fn_
+        };
+        let ft = self.tangential.force(&mut history.0, vt, touch, load, dt);
         let ft = <Dim<D> as Space<D>>::to_vector(ft, &n);
         let mut response = Response::force(n * fn_ + ft);
         if C::ACTIVE {
@@ -327,7 +340,7 @@ where
             response.torque_j = turn * -lever_j;
         }
         if R::ACTIVE {
-            let m = self.rolling.torque(&mut history.1, touch, fn_, dt);
+            let m = self.rolling.torque(&mut history.1, touch, load, dt);
             response.torque_i += m;
             response.torque_j += -m;
         }

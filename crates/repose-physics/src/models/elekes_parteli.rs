@@ -145,6 +145,21 @@ pub enum TangentialCap {
     Spring,
 }
 
+/// The normal force that bounds sliding (eq. 11) and rolling (eq. 15).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LimitLoad {
+    /// The contact's repulsion `|F_n^c|` of eq. 10, as eqs. 11 and 15 print
+    /// it (and LIGGGHTS's default): the attraction presses a cohesive contact
+    /// harder and so raises both limits.
+    #[default]
+    Contact,
+    /// The net normal force, repulsion less attraction (never below zero):
+    /// the attraction then holds contacts together without making them
+    /// rougher.
+    Net,
+}
+
 /// How the surface energy follows a softened Young's modulus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -202,6 +217,7 @@ pub struct Material {
     pub rolling: Rolling,
     pub cohesion: Cohesion,
     pub tangential_cap: TangentialCap,
+    pub limit_load: LimitLoad,
     /// Whether grains rotate (rolling resistance needs it).
     pub rotation: bool,
 }
@@ -226,6 +242,7 @@ impl Default for Material {
             rolling: Rolling::Epsd2,
             cohesion: Cohesion::Vdw,
             tangential_cap: TangentialCap::Total,
+            limit_load: LimitLoad::Contact,
             rotation: true,
         }
     }
@@ -422,6 +439,7 @@ impl Parts {
                 mu: m.rolling_friction,
             },
             cohesion: VanDerWaals {
+                net_limits: m.limit_load == LimitLoad::Net,
                 hamaker: if cohesive { m.hamaker() } else { 0.0 },
                 d_min: m.d_min,
                 d_max: m.d_max,
@@ -629,6 +647,7 @@ impl Model for ElekesParteli {
             ("rolling".to_string(), on(m.rolls(), "epsd2")),
             ("cohesion".to_string(), on(m.coheres(), "vdw")),
             ("tangential_cap".to_string(), name(json!(m.tangential_cap))),
+            ("limit_load".to_string(), name(json!(m.limit_load))),
             ("rotation".to_string(), m.rotation.to_string()),
         ])
     }

@@ -14,7 +14,7 @@ use crate::fitted::Along;
 use repose_store::Aggregate;
 
 const FIT_DIFFERS: &str =
-    "the paper's value lies outside our 95 % interval: see the fidelity section (softened stiffness, heap size)";
+    "the paper's value lies outside our 95 % interval: softened cohesive grains stick more than glass-stiff ones and our heaps are smaller (the preset's bias is stated under Cost)";
 
 pub fn compare(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();

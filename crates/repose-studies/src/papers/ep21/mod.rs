@@ -10,6 +10,14 @@
 //! stiffness cost in θ_r. A smaller plate does not do: on a 16 d plate
 //! with 1200 grains a dry heap keeps under a hundred grains and stands at
 //! 16°, where the 20 d plate keeps 660 and stands at 25°.
+//!
+//! Sliding and rolling are bounded by the contact's repulsion, as eqs. 11
+//! and 15 print them. Bounding them by the net normal force instead
+//! (`material.limit_load = "net"`) brings a glass-stiff 1 mm heap from 42°
+//! to 31° (the paper: 26°), but in the `standard` reproduction it leaves
+//! the small heaps towers and takes most of the cohesive loosening out of
+//! the packings (C = 0.16 against the paper's 0.56; 0.46 as printed); see
+//! `docs/model-3d.md`.
 
 pub mod compare;
 pub mod curves;
