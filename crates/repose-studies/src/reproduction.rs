@@ -293,8 +293,12 @@ impl Reproduction {
                 let _ = write!(s, " {label} |");
             }
             let _ = writeln!(s, "\n|---|---|---|{}", "---|".repeat(shown.len()));
+            let named = crate::papers::find(&self.paper).map(|paper| paper.point_label);
             for p in &d.points {
-                let _ = write!(s, "| {} | {} | {} |", point_label(p), p.samples, p.failures);
+                let label = named
+                    .and_then(|f| f(&p.point))
+                    .unwrap_or_else(|| point_label(p));
+                let _ = write!(s, "| {label} | {} | {} |", p.samples, p.failures);
                 for (m, _) in &shown {
                     let _ = write!(s, " {} |", fmt_agg(p.metrics.get(m).copied()));
                 }

@@ -272,3 +272,14 @@ fn a_fit_too_loose_to_test_a_constant_does_not_resolve_it() {
     assert_eq!(d.verdict, "not resolved", "{d:?}");
     assert!(d.reason.contains("wider than the value"), "{}", d.reason);
 }
+
+#[test]
+fn reports_name_points_in_the_papers_quantities() {
+    let label = ep21::PAPER.point_label;
+    let map = |v: Value| v.as_object().unwrap().clone();
+    let both = map(json!({"grains.diameter": 6e-5, "gravity": gravity(0.063)}));
+    assert_eq!(label(&both).as_deref(), Some("d = 60 µm, g̃ = 0.063"));
+    let dry = map(json!({"gravity": gravity(100.0)}));
+    assert_eq!(label(&dry).as_deref(), Some("g̃ = 100"));
+    assert_eq!(label(&map(json!({"heap.plate": 20}))), None);
+}

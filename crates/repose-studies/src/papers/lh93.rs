@@ -20,6 +20,7 @@ pub static PAPER: Paper = Paper {
     quantities: &[],
     report: "reproduction",
     accuracy,
+    point_label: |_| None,
 };
 
 /// What a preset gives up, from the speed/accuracy study's samples

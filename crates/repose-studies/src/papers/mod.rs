@@ -42,6 +42,9 @@ pub struct Paper {
     /// What a fidelity preset gives up on this paper's scenes, from the
     /// speed/accuracy study whose files lie in the given folder.
     pub accuracy: fn(&std::path::Path, Preset) -> Option<String>,
+    /// How its reports name a point, in the paper's quantities (`d = 60 µm,
+    /// g̃ = 0.063`); `None` leaves the axis values as they are.
+    pub point_label: fn(&Map<String, Value>) -> Option<String>,
 }
 
 /// A quantity computed from the axis values of a point.

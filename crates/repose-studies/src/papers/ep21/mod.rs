@@ -39,6 +39,7 @@ pub static PAPER: Paper = Paper {
     accuracy: |docs, preset| {
         crate::tradeoff::heap::preset_bias(&docs.join("tradeoff-heap.csv"), preset.name())
     },
+    point_label,
 };
 
 /// Earth's gravity, m/s²: g̃ = g / G_EARTH.
@@ -109,6 +110,19 @@ pub fn bond(point: &Map<String, Value>) -> Option<f64> {
     let d = point.get("grains.diameter")?.as_f64()?;
     let g = g_tilde(point)? * G_EARTH;
     Some(12.0 * SURFACE_ENERGY / (d * d * g * DENSITY))
+}
+
+/// A point as the paper names it: `d = 60 µm, g̃ = 0.063` (either part
+/// alone where the other is not an axis).
+fn point_label(point: &Map<String, Value>) -> Option<String> {
+    let parts: Vec<String> = [
+        d_um(point).map(|d| format!("d = {d} µm")),
+        g_tilde(point).map(|g| format!("g̃ = {g}")),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
 }
 
 /// The gravity vector of g̃.
