@@ -122,10 +122,18 @@ impl Chart {
     /// The chart as a standalone SVG document.
     pub fn svg(&self) -> String {
         let f = self.frame();
+        // Wide enough for the longest legend entry (about 7 px a character at 12 px).
+        let longest = self
+            .series
+            .iter()
+            .map(|x| x.name.chars().count())
+            .max()
+            .unwrap_or(0);
+        let width = W.max(W - RIGHT + 40.0 + 7.0 * longest as f64).ceil();
         let mut s = String::new();
         let _ = writeln!(
             s,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{H}" viewBox="0 0 {width} {H}" font-family="sans-serif" font-size="12">"#
         );
         let _ = writeln!(s, r##"<rect width="100%" height="100%" fill="#ffffff"/>"##);
         let _ = writeln!(
@@ -221,7 +229,8 @@ impl Frame {
     }
 
     /// Tick positions (in plotted coordinates) with their labels; 1, 2, 5
-    /// per decade on a log axis.
+    /// per decade on a log axis, or only the powers of ten where it spans
+    /// more than three decades (their labels would run into each other).
     fn x_ticks(&self) -> Vec<(f64, String)> {
         if !self.log_x {
             return ticks(self.x0, self.x1)
@@ -230,9 +239,14 @@ impl Frame {
                 .collect();
         }
         let (a, b) = (self.x0.floor() as i32, self.x1.ceil() as i32);
+        let mantissas: &[f64] = if self.x1 - self.x0 > 3.0 {
+            &[1.0]
+        } else {
+            &[1.0, 2.0, 5.0]
+        };
         let mut v = Vec::new();
         for e in a..=b {
-            for m in [1.0, 2.0, 5.0] {
+            for &m in mantissas {
                 let l = (m * 10f64.powi(e)).log10();
                 if l >= self.x0 && l <= self.x1 {
                     v.push((l, tick_label(m * 10f64.powi(e))));
@@ -400,6 +414,27 @@ mod tests {
         let t = ticks(0.3, 9.7);
         assert_eq!(t, vec![2.0, 4.0, 6.0, 8.0]);
         assert!(ticks(-1.2, 1.3).contains(&0.0));
+    }
+
+    #[test]
+    fn a_wide_log_axis_labels_only_powers_of_ten() {
+        let chart = |hi: f64| {
+            let mut c = Chart::new("t", "x", "y");
+            c.log_x = true;
+            c.series.push(
+                Series::new("a", Style::Points)
+                    .point(0.2, 1.0, 0.0)
+                    .point(hi, 2.0, 0.0),
+            );
+            c.svg()
+        };
+        let wide = chart(1e5);
+        assert!(
+            wide.contains(">1000<") && !wide.contains(">2000<"),
+            "{wide}"
+        );
+        let narrow = chart(50.0);
+        assert!(narrow.contains(">2<") && narrow.contains(">5<"), "{narrow}");
     }
 
     #[test]
