@@ -303,12 +303,6 @@ async fn reproduce(
         engine: ENGINE.into(),
         preset: args.preset.name().into(),
         preset_settings: preset_settings(paper, args.preset),
-        samples_per_point: sweeps
-            .iter()
-            .filter(|d| d.key != "fig5")
-            .map(|d| d.points.first().map_or(0, |p| p.samples as u64))
-            .max()
-            .unwrap_or(0),
         reduced: args.reduced,
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
         wall_time_s: elapsed,

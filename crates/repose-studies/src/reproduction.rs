@@ -36,7 +36,6 @@ pub struct Reproduction {
     /// The fidelity preset and what it sets.
     pub preset: String,
     pub preset_settings: String,
-    pub samples_per_point: u64,
     pub reduced: bool,
     pub cores: usize,
     /// Wall time of the whole reproduction, s.

@@ -321,11 +321,7 @@ where
         let vn = v.dot(&n);
         let fn_ = self.normal.force(touch, vn);
         let vt = <Dim<D> as Space<D>>::tangential(&v, &n);
-        let load = if C::ACTIVE {
-            self.cohesion.limit_load(touch, fn_)
-        } else {
-            fn_
-        };
+        let load = self.cohesion.limit_load(touch, fn_);
         let ft = self.tangential.force(&mut history.0, vt, touch, load, dt);
         let ft = <Dim<D> as Space<D>>::to_vector(ft, &n);
         let mut response = Response::force(n * fn_ + ft);
