@@ -99,8 +99,9 @@ pub fn svg(r: &RunReport) -> String {
     s
 }
 
-/// The triangle of the outline's area on the plate (solid) and on the
-/// heap's own footprint (dashed), with the angles.
+/// The triangle of the outline's area on the plate (solid) and of the
+/// mound above the footprint's height on the footprint (dashed), with the
+/// angles.
 fn triangle(
     view: &Value,
     d: f64,
@@ -110,25 +111,26 @@ fn triangle(
 ) -> String {
     let num = |k: &str| view.get(k).and_then(Value::as_f64).unwrap_or(0.0);
     let mut s = String::new();
-    for (half, theta, dash, label_y) in [
-        (half_plate, num("theta_plate"), "", 18.0),
+    for (half, base, theta, dash, label_y) in [
+        (half_plate, 0.0, num("theta_plate"), "", 18.0),
         (
             0.5 * num("footprint") * d,
+            num("footprint_height") * d,
             num("theta_footprint"),
             r#" stroke-dasharray="5 3""#,
             36.0,
         ),
     ] {
-        let apex = half * theta.to_radians().tan();
+        let apex = base + half * theta.to_radians().tan();
         let _ = writeln!(
             s,
             r##"<polyline points="{:.1},{:.1} {:.1},{:.1} {:.1},{:.1}" fill="none" stroke="#c0392b" stroke-width="1.5"{dash}/>"##,
             px(-half),
-            py(0.0),
+            py(base),
             px(0.0),
             py(apex),
             px(half),
-            py(0.0)
+            py(base)
         );
         let _ = writeln!(
             s,

@@ -27,11 +27,19 @@ fn mass() -> f64 {
 }
 
 /// Grain–grain and grain–plate parts for a material given as overrides
-/// (glass beads of 1 mm otherwise).
+/// (glass beads of 1 mm otherwise), for a scene stepped finely (Gear-5):
+/// the tests below step their collisions themselves.
 fn parts(material: &[&str]) -> (Parts, Parts) {
+    let mut o = vec!["numerics.integrator=\"gear5\""];
+    o.extend_from_slice(material);
+    scene_parts(&o)
+}
+
+/// The parts of a one-grain scene with the given overrides.
+fn scene_parts(overrides: &[&str]) -> (Parts, Parts) {
     let base = "protocol = \"free_run\"\ndimension = 3\nduration = 1.0\n\
                 [[particles]]\nposition = [0.0, 0.0, 0.0]\nradius = 0.0005\n";
-    let o: Vec<String> = material.iter().map(|s| s.to_string()).collect();
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     let scene = Scene::from_toml(base, &o).unwrap();
     elekes_parteli::parts(&scene).unwrap()
 }
@@ -62,6 +70,48 @@ where
 fn collision_time(p: &Parts, speed: f64) -> f64 {
     let k = p.normal.modulus * (0.25 * D).sqrt();
     3.21 * (0.5 * mass() / k).powf(0.4) * speed.powf(-0.2)
+}
+
+/// Restitution of a head-on collision at relative speed `v` stepped by
+/// velocity Verlet at `dt`, averaged over eight instants of first contact
+/// within a step.
+fn verlet_restitution(parts: (Parts, Parts), v: f64, dt: f64) -> f64 {
+    let phases = 8;
+    let t = collision_time(&parts.0, v);
+    let mean = (0..phases)
+        .map(|k| {
+            let gap = 1e-3 * D + (k as f64 + 0.5) / phases as f64 * v * dt;
+            let grains = [
+                (
+                    Vector::<3>::new(-0.5 * (D + gap), 0.0, 0.0),
+                    Vector::<3>::new(0.5 * v, 0.0, 0.0),
+                ),
+                (
+                    Vector::<3>::new(0.5 * (D + gap), 0.0, 0.0),
+                    Vector::<3>::new(-0.5 * v, 0.0, 0.0),
+                ),
+            ];
+            let mut s: Simulation<3, Law<NoRolling, NoCohesion, true>, VelocityVerlet> =
+                sim(parts, &grains, vec![], Vector::<3>::zeros(), dt);
+            s.run(((gap / v + 2.0 * t) / dt) as u64).unwrap();
+            (s.particles.vel[1].x - s.particles.vel[0].x) / v
+        })
+        .sum::<f64>();
+    mean / phases as f64
+}
+
+#[test]
+fn velocity_verlet_at_the_scenes_own_step_rebounds_with_the_restitution_asked_for() {
+    // The default: Verlet at a tenth of the collision time, A_n solved for it.
+    let stepped = scene_parts(&["material.surface_energy=0"]);
+    let dt = collision_time(&stepped.0, 1.0) / 10.0;
+    let e = verlet_restitution(stepped, 1.0, dt);
+    // A_n solved on the exact collision rebounds less at that step.
+    let exact = parts(&["material.surface_energy=0"]);
+    let e_exact = verlet_restitution(exact, 1.0, dt);
+    println!("ε at 1 m/s, Verlet at T_col/10: {e:.4} (A_n for the step), {e_exact:.4} (exact A_n)");
+    assert!((e - 0.2).abs() < 2e-3, "{e}");
+    assert!(e_exact < 0.195, "{e_exact}");
 }
 
 /// Restitution of a head-on collision at relative speed `v` in the engine.
@@ -300,6 +350,52 @@ fn spheres_released_just_inside_the_range_close_the_gap_and_stick() {
     assert!(gap < 0.0, "{gap}");
 }
 
+/// The overlap two free spheres settle at under their own attraction
+/// (`contact_attraction` as given), started touching at rest.
+fn resting_overlap(attraction: &str) -> f64 {
+    let mode = format!("material.contact_attraction=\"{attraction}\"");
+    let p = parts(&["material.youngs_modulus=1e8", &mode]);
+    let grains = [
+        (Vector::<3>::new(-0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
+        (Vector::<3>::new(0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
+    ];
+    let dt = collision_time(&p.0, 0.1) / 100.0;
+    let mut s: Simulation<3, Law<NoRolling, VanDerWaals, false>, VelocityVerlet> =
+        sim(p, &grains, vec![], Vector::<3>::zeros(), dt);
+    s.run((0.02 / dt) as u64).unwrap();
+    D - (s.particles.pos[1].x - s.particles.pos[0].x)
+}
+
+#[test]
+fn a_fading_contact_attraction_rests_where_hertz_balances_the_hamaker_law_at_the_overlap() {
+    // k_n δ^{3/2} = F_0 for the constant attraction F_0 = π γ d;
+    // k_n δ^{3/2} = F_0 (D_min / (δ + D_min))² where it fades.
+    let p = parts(&["material.youngs_modulus=1e8"]);
+    let k = p.0.normal.modulus * (0.25 * D).sqrt();
+    let f0 = std::f64::consts::PI * 0.05 * D;
+    let d_min = 1.65e-10;
+    let constant = (f0 / k).powf(2.0 / 3.0);
+    let (mut lo, mut hi) = (0.0, constant);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        let excess = k * mid.powf(1.5) - f0 * (d_min / (mid + d_min)).powi(2);
+        if excess > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let fading = 0.5 * (lo + hi);
+    let (got_constant, got_fading) = (resting_overlap("constant"), resting_overlap("fading"));
+    println!(
+        "resting overlap: constant {got_constant:.4e} m (closed form {constant:.4e}), \
+         fading {got_fading:.4e} m (closed form {fading:.4e})"
+    );
+    assert!((got_constant / constant - 1.0).abs() < 1e-3);
+    assert!((got_fading / fading - 1.0).abs() < 1e-3);
+    assert!(fading < 0.5 * constant);
+}
+
 /// Two touching spheres that do not rotate, pressed together by `press`
 /// and sheared sideways by `shear` (opposite on each); how far they have
 /// slid past each other after `duration`.
@@ -341,6 +437,30 @@ fn the_attraction_raises_the_sliding_limit_unless_the_limits_see_the_net_force()
     assert!(!held("net", 0.0, 0.1 * mu * attraction));
     assert!(held("net", press, 0.9 * mu * press));
     assert!(!held("net", press, 1.1 * mu * press));
+    // |F_n − F_vdW| (LIGGGHTS ≤ 3.3.1): pressed, as `net`.
+    assert!(held("liggghts", press, 0.9 * mu * press));
+    assert!(!held("liggghts", press, 1.1 * mu * press));
+}
+
+#[test]
+fn a_pair_hanging_under_tension_keeps_friction_only_with_the_absolute_net_force() {
+    // Pulled apart by a tension T below the pull-off force, the pair rests
+    // with the repulsion π γ d − T. As printed the limit is μ (π γ d − T);
+    // on the net force floored at zero there is none; on its size, μ T.
+    let attraction = std::f64::consts::PI * 0.05 * D;
+    let mu = 0.5;
+    let tension = 0.3 * attraction;
+    let held = |load: &str, shear: f64| {
+        let slid = sheared_pair(load, -tension, shear, 5e-3);
+        println!("limits on the {load} force, pulled {tension:.2e} N, sheared {shear:.2e} N: slid {slid:.2e} m");
+        slid.abs() < 1e-3 * D
+    };
+    let printed = mu * (attraction - tension);
+    assert!(held("contact", 0.9 * printed));
+    assert!(!held("contact", 1.1 * printed));
+    assert!(!held("net", 0.05 * mu * tension));
+    assert!(held("liggghts", 0.9 * mu * tension));
+    assert!(!held("liggghts", 1.1 * mu * tension));
 }
 
 /// Eight spheres in free space with random velocities and spins, colliding.

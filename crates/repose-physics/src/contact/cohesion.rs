@@ -5,19 +5,35 @@ use super::{CohesionLaw, Touch};
 use crate::dim::{Dim, Space};
 
 /// `F = A_H R_eff / (6 (s + D_min)²)` across a gap `s` up to `D_max`,
-/// and its value at `s = 0` while the spheres touch (the attraction does not
-/// grow with the overlap). `A_H = 24π D_min² γ` for a surface energy `γ`.
+/// and while the spheres touch either its value at `s = 0` (eq. 13 as
+/// printed: the attraction does not grow with the overlap) or, with
+/// `fades_in_contact`, the same law with the overlap `δ` as the distance,
+/// `A_H R_eff / (6 (δ + D_min)²)`. `A_H = 24π D_min² γ` for a surface
+/// energy `γ`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VanDerWaals {
-    /// Whether the sliding and rolling limits scale with the net normal
-    /// force (repulsion less attraction) rather than the repulsion alone.
-    pub net_limits: bool,
+    /// The normal force the sliding and rolling limits scale with.
+    pub limits: Limits,
+    /// Whether the attraction of touching spheres falls with their overlap.
+    pub fades_in_contact: bool,
     /// Hamaker constant `A_H`, J.
     pub hamaker: f64,
     /// Cut-off of the attraction at contact, `D_min`, m.
     pub d_min: f64,
     /// Largest gap across which it acts, `D_max`, m.
     pub d_max: f64,
+}
+
+/// The normal force that bounds sliding and rolling in a cohesive contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Limits {
+    /// The contact's normal force `F_n` alone (eqs. 11 and 15 as printed).
+    Repulsion,
+    /// `max(0, F_n − F_vdW)`: the attraction holds, but adds no friction.
+    Net,
+    /// `|F_n − F_vdW|`: LIGGGHTS 2.x–3.3.1, whose caps read the normal
+    /// force with the cohesive force added; friction acts under tension too.
+    NetAbsolute,
 }
 
 impl VanDerWaals {
@@ -33,7 +49,12 @@ impl VanDerWaals {
         if gap > self.d_max {
             return 0.0;
         }
-        let s = gap.max(0.0) + self.d_min;
+        let distance = if self.fades_in_contact {
+            gap.abs()
+        } else {
+            gap.max(0.0)
+        };
+        let s = distance + self.d_min;
         self.hamaker * r_eff / (6.0 * s * s)
     }
 }
@@ -55,19 +76,26 @@ where
 
     #[inline(always)]
     fn limit_load(&self, touch: &Touch<D>, repulsion: f64) -> f64 {
-        if self.net_limits {
-            (repulsion - self.attraction(touch)).max(0.0)
-        } else {
-            repulsion
+        match self.limits {
+            Limits::Repulsion => repulsion,
+            Limits::Net => (repulsion - self.attraction(touch)).max(0.0),
+            Limits::NetAbsolute => (repulsion - self.attraction(touch)).abs(),
         }
     }
 
     /// `∫ F ds` across the gap, `A_H R (1/D_min − 1/(D_max + D_min)) / 6`,
-    /// plus the constant contact value times the depth.
+    /// plus its work over the depth: the contact value times the depth, or
+    /// `A_H R (1/D_min − 1/(depth + D_min)) / 6` where it fades.
     fn work(&self, r_eff: f64, depth: f64) -> f64 {
-        let across =
-            self.hamaker * r_eff / 6.0 * (1.0 / self.d_min - 1.0 / (self.d_max + self.d_min));
-        across + self.at(r_eff, 0.0) * depth.max(0.0)
+        let scale = self.hamaker * r_eff / 6.0;
+        let across = scale * (1.0 / self.d_min - 1.0 / (self.d_max + self.d_min));
+        let depth = depth.max(0.0);
+        let inside = if self.fades_in_contact {
+            scale * (1.0 / self.d_min - 1.0 / (depth + self.d_min))
+        } else {
+            self.at(r_eff, 0.0) * depth
+        };
+        across + inside
     }
 }
 
@@ -80,7 +108,8 @@ mod tests {
         let a = VanDerWaals::hamaker_of(0.05, 1.65e-10);
         assert!((a - 1.026e-19).abs() < 1e-22, "{a}");
         let law = VanDerWaals {
-            net_limits: false,
+            limits: Limits::Repulsion,
+            fades_in_contact: false,
             hamaker: a,
             d_min: 1.65e-10,
             d_max: 1e-6,

@@ -22,7 +22,7 @@ pub mod restitution;
 mod rolling;
 mod viscoelastic;
 
-pub use cohesion::VanDerWaals;
+pub use cohesion::{Limits, VanDerWaals};
 pub use friction::{CundallStrack, Frictionless, ShearSpring};
 pub use hertz::HertzDamped;
 pub use rolling::{Epsd2, RollingSpring};

@@ -52,6 +52,13 @@ pub struct HeapSpec {
     pub settle_min: f64,
     /// Most time to settle after the last insertion, √(d/g).
     pub settle_max: f64,
+    /// Every this many grains poured, read the angle of the grains at rest
+    /// and stop pouring once it has risen by no more than
+    /// `steady_tolerance` since the last reading (0: pour `max_grains`).
+    pub steady_every: usize,
+    /// The rise of the angle between two readings below which the heap is
+    /// at its angle of repose, °.
+    pub steady_tolerance: f64,
 }
 
 impl Default for HeapSpec {
@@ -67,6 +74,8 @@ impl Default for HeapSpec {
             rest_energy: 1e-6,
             settle_min: 20.0,
             settle_max: 400.0,
+            steady_every: 0,
+            steady_tolerance: 0.5,
         }
     }
 }
@@ -98,6 +107,7 @@ impl Section for HeapSpec {
         if self.inlet_width > self.plate {
             c.fail("heap.inlet_width", "must not exceed the plate");
         }
+        c.positive("heap.steady_tolerance", self.steady_tolerance);
         if self.settle_max < self.settle_min {
             c.fail("heap.settle_max", "must not be below heap.settle_min");
         }
@@ -114,7 +124,7 @@ impl Section for HeapSpec {
     }
 }
 
-static METRICS: [Metric; 6] = [
+static METRICS: [Metric; 9] = [
     Metric {
         name: "theta_r",
         label: "θ_r",
@@ -156,6 +166,27 @@ static METRICS: [Metric; 6] = [
         unit: "d",
         description: "rms distance of the side views' outlines from their fitted triangles: small for a regular cone (regime II), large for an irregular heap (regime I)",
         phase: "settle",
+    },
+    Metric {
+        name: "edge_height",
+        label: "edge",
+        unit: "d",
+        description: "height of the outline at the plate's edges: grains that stay there in a layer add to the area under the outline, and so to θ_r, without steepening the heap's slope",
+        phase: "settle",
+    },
+    Metric {
+        name: "grains_poured",
+        label: "poured",
+        unit: "grains",
+        description: "grains poured before the pour stopped",
+        phase: "pour",
+    },
+    Metric {
+        name: "pour_steady",
+        label: "steady",
+        unit: "",
+        description: "1 if the pour stopped because the angle had stopped rising (heap.steady_every), else 0",
+        phase: "pour",
     },
 ];
 
@@ -252,6 +283,10 @@ impl EngineJob<3> for Job<'_> {
             Err(outcome) => outcome,
         };
         findings.inserted = pour.state.inserted;
+        if outcome.is_completed() {
+            findings.metric("grains_poured", pour.state.inserted as f64);
+            findings.metric("pour_steady", f64::from(u8::from(pour.state.steady)));
+        }
         findings.series.extend(pour.history());
         run.report(outcome, findings)
     }
@@ -308,6 +343,13 @@ struct PourState {
     heap: Vec<[f64; 2]>,
     /// Simulated time of the last insertion that added grains, s.
     last_insertion: f64,
+    /// `[grains poured, θ of the grains at rest]` at each reading of
+    /// `steady_every`, °.
+    #[serde(default)]
+    readings: Vec<[f64; 2]>,
+    /// Whether the pour stopped because the angle stopped rising.
+    #[serde(default)]
+    steady: bool,
 }
 
 impl PourState {
@@ -318,6 +360,8 @@ impl PourState {
             crest: Vec::new(),
             heap: Vec::new(),
             last_insertion: 0.0,
+            readings: Vec::new(),
+            steady: false,
         }
     }
 }
@@ -329,8 +373,12 @@ impl Pour<'_> {
     ) -> Result<(), Outcome> {
         let s = self.scales;
         let steps = ((self.spec.interval * s.time / run.sim.dt).round() as u64).max(1);
-        while self.state.inserted < self.spec.max_grains {
+        while self.state.inserted < self.spec.max_grains && !self.state.steady {
             run.checkpoint(&self.state);
+            self.read_angle(&run.sim.particles);
+            if self.state.steady {
+                break;
+            }
             let (crest, resting) = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
             let t = run.sim.time / s.time;
             self.state.crest.push([t, crest / s.d]);
@@ -362,6 +410,38 @@ impl Pour<'_> {
                 )
             })
         })
+    }
+
+    /// At each multiple of `steady_every` grains poured, reads the angle of
+    /// the grains at rest and marks the pour steady if it has not risen by
+    /// more than `steady_tolerance` since the last reading.
+    fn read_angle(&mut self, p: &Particles<3>) {
+        let every = self.spec.steady_every;
+        let due = (self.state.readings.len() + 1) * every;
+        if every == 0 || self.state.inserted < due {
+            return;
+        }
+        let s = self.scales;
+        let slow = 0.5 * (s.g * s.d).sqrt();
+        let resting: Vec<usize> = (0..p.len())
+            .filter(|&i| p.vel[i].norm_squared() < slow * slow)
+            .collect();
+        let pos: Vec<Vector<3>> = resting.iter().map(|&i| p.pos[i]).collect();
+        let radius: Vec<f64> = resting.iter().map(|&i| p.radius[i]).collect();
+        let half = 0.5 * self.spec.plate * s.d;
+        let theta = (0..2)
+            .filter_map(|axis| {
+                let profile = Profile::measure(&pos, &radius, axis, -half, half);
+                SideView::of(&profile, s.d, self.spec.plate)
+            })
+            .map(|v| 0.5 * v.theta_plate)
+            .sum::<f64>();
+        if let Some(&[_, last]) = self.state.readings.last() {
+            self.state.steady = theta - last <= self.spec.steady_tolerance;
+        }
+        self.state
+            .readings
+            .push([self.state.inserted as f64, theta]);
     }
 
     /// Fills the insertion prism above `floor` to its solid fraction.
@@ -409,8 +489,9 @@ impl Pour<'_> {
         new.len()
     }
 
-    /// The pour history: the crest and the grains at rest before each insertion.
-    fn history(&self) -> [Curve; 2] {
+    /// The pour history: the crest and the grains at rest before each
+    /// insertion, and the angle at each reading.
+    fn history(&self) -> [Curve; 3] {
         let curve = |name: &str, title: &str, y_label: &str, points: &[[f64; 2]]| Curve {
             name: name.into(),
             title: title.into(),
@@ -432,6 +513,15 @@ impl Pour<'_> {
                 "grains in the heap",
                 &self.state.heap,
             ),
+            Curve {
+                x_label: "grains poured".into(),
+                ..curve(
+                    "pour_angle",
+                    "angle of the grains at rest while pouring (heap.steady_every)",
+                    "θ_r (°)",
+                    &self.state.readings,
+                )
+            },
         ]
     }
 }
@@ -450,6 +540,11 @@ fn crest(p: &Particles<3>, slow: f64) -> (f64, usize) {
     (top, resting)
 }
 
+/// The least height of the outline, in grain diameters, at which a column
+/// belongs to a heap's footprint: one grain resting on the plate reaches
+/// exactly one diameter, a grain on a lower neighbour less.
+pub const FOOTPRINT_HEIGHT: f64 = 1.5;
+
 /// One side view of a heap.
 #[derive(Debug, Clone, Serialize)]
 pub struct SideView {
@@ -457,41 +552,62 @@ pub struct SideView {
     pub area: f64,
     /// Angle with the plate as base, °.
     pub theta_plate: f64,
-    /// The outline's extent along the view, d.
+    /// The extent along the view of the outline at least
+    /// [`FOOTPRINT_HEIGHT`] high, d.
     pub footprint: f64,
-    /// Angle with the footprint as base, °.
+    /// The height the footprint is read at, [`FOOTPRINT_HEIGHT`], d.
+    pub footprint_height: f64,
+    /// Angle of the mound above [`FOOTPRINT_HEIGHT`] with the footprint as base, °.
     pub theta_footprint: f64,
     /// Rms distance of the outline from its fitted triangle, d.
     pub roughness: f64,
+    /// Mean height of the outline in the outermost column at either end of
+    /// the plate, d: a layer of grains there raises `theta_plate` by
+    /// `atan` of about `4 × edge/plate` over the mound's own angle.
+    pub edge: f64,
 }
 
 impl SideView {
-    /// Reads a profile (lengths in m) with plate side `plate` (d).
+    /// Reads a profile (lengths in m) with plate side `plate` (d). The
+    /// footprint spans the columns whose outline stands at least
+    /// [`FOOTPRINT_HEIGHT`] high, so that a grain or a chain of single
+    /// grains rolled out to the plate's edge does not widen it; its angle is
+    /// that of the mound above that height (a triangle cut by a line parallel
+    /// to its base is a triangle of the same angles).
     pub fn of(profile: &Profile, d: f64, plate: f64) -> Option<SideView> {
         let w = profile.cell_width / d;
         let h: Vec<f64> = profile.h.iter().map(|v| v / d).collect();
         let x: Vec<f64> = profile.x.iter().map(|v| v / d).collect();
-        let first = h.iter().position(|v| *v > 0.0)?;
-        let last = h.iter().rposition(|v| *v > 0.0)?;
+        let first = h.iter().position(|v| *v >= FOOTPRINT_HEIGHT)?;
+        let last = h.iter().rposition(|v| *v >= FOOTPRINT_HEIGHT)?;
         let area: f64 = h.iter().sum::<f64>() * w;
+        let mound: f64 = h[first..=last]
+            .iter()
+            .map(|v| (v - FOOTPRINT_HEIGHT).max(0.0))
+            .sum::<f64>()
+            * w;
         let footprint = (last - first + 1) as f64 * w;
-        let angle = |b: f64| (4.0 * area / (b * b)).atan().to_degrees();
-        let theta_footprint = angle(footprint);
-        let centre = h.iter().zip(&x).map(|(h, x)| h * x).sum::<f64>() / h.iter().sum::<f64>();
+        let angle = |a: f64, b: f64| (4.0 * a / (b * b)).atan().to_degrees();
+        let theta_footprint = angle(mound, footprint);
+        let lift = |k: usize| (h[k] - FOOTPRINT_HEIGHT).max(0.0);
+        let centre = (first..=last).map(|k| lift(k) * x[k]).sum::<f64>()
+            / (first..=last).map(lift).sum::<f64>().max(f64::MIN_POSITIVE);
         let slope = theta_footprint.to_radians().tan();
         let rms = (first..=last)
             .map(|k| {
-                let tri = (slope * (0.5 * footprint - (x[k] - centre).abs())).max(0.0);
-                (h[k] - tri).powi(2)
+                let tri = FOOTPRINT_HEIGHT + slope * (0.5 * footprint - (x[k] - centre).abs());
+                (h[k] - tri.max(0.0)).powi(2)
             })
             .sum::<f64>()
             / (last - first + 1) as f64;
         Some(SideView {
             area,
-            theta_plate: angle(plate),
+            theta_plate: angle(area, plate),
             footprint,
+            footprint_height: FOOTPRINT_HEIGHT,
             theta_footprint,
             roughness: rms.sqrt(),
+            edge: 0.5 * (h[0] + h[h.len() - 1]),
         })
     }
 }
@@ -529,6 +645,7 @@ fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -
         .fold(0.0, f64::max);
     findings.metric("heap_height", top / d);
     findings.metric("surface_roughness", mean_sd(&|v| v.roughness).0);
+    findings.metric("edge_height", mean_sd(&|v| v.edge).0);
     findings.details = json!({ "side_views": { "xz": views[0], "yz": views[1] } });
     findings.profiles = profiles;
     Outcome::Completed

@@ -1,0 +1,54 @@
+#!/bin/bash
+# The glass-stiff reference heaps (Y = 63 GPa): runs every sweep in
+# sweeps/glass/ through the service on an SQLite store and writes each
+# sweep's samples to data/glass/<sweep>.csv.
+#
+#   cargo build --release && scripts/glass-reference.sh [SWEEP.toml ...]
+#
+# A heap of glass costs 10¹⁰–10¹¹ particle-steps (minutes to an hour on one
+# core), so the runs go through the queue: samples checkpoint every few
+# minutes, and running the script again after an interruption continues
+# the sweeps already queued in the store (data/glass/glass.db) from their
+# checkpoints instead of queueing them anew.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+REPOSE=${REPOSE:-$PWD/target/release/repose}
+PORT=${PORT:-8093}
+SERVER=http://127.0.0.1:$PORT
+STORE=${STORE:-$PWD/data/glass/glass.db}
+mkdir -p data/glass
+if [ $# -eq 0 ]; then set -- sweeps/glass/*.toml; fi
+
+"$REPOSE" serve --database "sqlite://$STORE" --listen "127.0.0.1:$PORT" \
+  --checkpoint-every 300 > data/glass/serve.log 2>&1 &
+SERVE=$!
+trap 'kill $SERVE 2>/dev/null; wait $SERVE 2>/dev/null || true' EXIT
+for _ in $(seq 1 50); do
+  "$REPOSE" status --server "$SERVER" > /dev/null 2>&1 && break
+  sleep 0.2
+done
+
+# The id of the sweep named in a spec file, queueing it if the store has none.
+sweep_id() {
+  local name
+  name=$(sed -n 's/^name = "\(.*\)"$/\1/p' "$1")
+  local id
+  id=$("$REPOSE" status --server "$SERVER" | awk -v n="$name" 'index($0, n) { print $1; exit }')
+  if [ -z "$id" ]; then
+    id=$("$REPOSE" submit "$1" --server "$SERVER" | sed -n 's/^sweep \([0-9a-f-]*\):.*/\1/p')
+  fi
+  echo "$id"
+}
+
+declare -A ids
+for spec in "$@"; do ids[$spec]=$(sweep_id "$spec"); done
+for spec in "$@"; do
+  id=${ids[$spec]}
+  echo "waiting for $(basename "$spec") ($id)"
+  until "$REPOSE" status --server "$SERVER" | awk -v id="$id" '$1 == id && $3 == 0 && $4 == 0 { found = 1 } END { exit !found }'; do
+    sleep 30
+  done
+  out=data/glass/$(basename "$spec" .toml).csv
+  "$REPOSE" export "$id" --what samples --server "$SERVER" -o "$out"
+  echo "wrote $out"
+done
