@@ -72,6 +72,20 @@ fn collision_time(p: &Parts, speed: f64) -> f64 {
     3.21 * (0.5 * mass() / k).powf(0.4) * speed.powf(-0.2)
 }
 
+/// Two grains `gap` apart closing head-on at relative speed `v`.
+fn head_on(v: f64, gap: f64) -> [(Vector<3>, Vector<3>); 2] {
+    [
+        (
+            Vector::<3>::new(-0.5 * (D + gap), 0.0, 0.0),
+            Vector::<3>::new(0.5 * v, 0.0, 0.0),
+        ),
+        (
+            Vector::<3>::new(0.5 * (D + gap), 0.0, 0.0),
+            Vector::<3>::new(-0.5 * v, 0.0, 0.0),
+        ),
+    ]
+}
+
 /// Restitution of a head-on collision at relative speed `v` stepped by
 /// velocity Verlet at `dt`, averaged over eight instants of first contact
 /// within a step.
@@ -81,16 +95,7 @@ fn verlet_restitution(parts: (Parts, Parts), v: f64, dt: f64) -> f64 {
     let mean = (0..phases)
         .map(|k| {
             let gap = 1e-3 * D + (k as f64 + 0.5) / phases as f64 * v * dt;
-            let grains = [
-                (
-                    Vector::<3>::new(-0.5 * (D + gap), 0.0, 0.0),
-                    Vector::<3>::new(0.5 * v, 0.0, 0.0),
-                ),
-                (
-                    Vector::<3>::new(0.5 * (D + gap), 0.0, 0.0),
-                    Vector::<3>::new(-0.5 * v, 0.0, 0.0),
-                ),
-            ];
+            let grains = head_on(v, gap);
             let mut s: Simulation<3, Law<NoRolling, NoCohesion, true>, VelocityVerlet> =
                 sim(parts, &grains, vec![], Vector::<3>::zeros(), dt);
             s.run(((gap / v + 2.0 * t) / dt) as u64).unwrap();
@@ -118,16 +123,7 @@ fn velocity_verlet_at_the_scenes_own_step_rebounds_with_the_restitution_asked_fo
 fn engine_restitution(parts: (Parts, Parts), v: f64) -> f64 {
     let t = collision_time(&parts.0, v);
     let gap = 1e-3 * D;
-    let grains = [
-        (
-            Vector::<3>::new(-0.5 * (D + gap), 0.0, 0.0),
-            Vector::<3>::new(0.5 * v, 0.0, 0.0),
-        ),
-        (
-            Vector::<3>::new(0.5 * (D + gap), 0.0, 0.0),
-            Vector::<3>::new(-0.5 * v, 0.0, 0.0),
-        ),
-    ];
+    let grains = head_on(v, gap);
     let mut s: Simulation<3, Law<NoRolling, NoCohesion, true>, Gear5> =
         sim(parts, &grains, vec![], Vector::<3>::zeros(), t / 2000.0);
     let steps = ((gap / v + 2.0 * t) / s.dt) as u64;
