@@ -346,18 +346,28 @@ fn spheres_released_just_inside_the_range_close_the_gap_and_stick() {
     assert!(gap < 0.0, "{gap}");
 }
 
-/// The overlap two free spheres settle at under their own attraction
-/// (`contact_attraction` as given), started touching at rest.
-fn resting_overlap(attraction: &str) -> f64 {
-    let mode = format!("material.contact_attraction=\"{attraction}\"");
-    let p = parts(&["material.youngs_modulus=1e8", &mode]);
+/// Two cohesive spheres of Y = 100 MPa that do not rotate, touching at rest
+/// (one more material override given), and the step they run with.
+fn touching_pair(
+    material: &str,
+) -> (
+    Simulation<3, Law<NoRolling, VanDerWaals, false>, VelocityVerlet>,
+    f64,
+) {
+    let p = parts(&["material.youngs_modulus=1e8", material]);
     let grains = [
         (Vector::<3>::new(-0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
         (Vector::<3>::new(0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
     ];
     let dt = collision_time(&p.0, 0.1) / 100.0;
-    let mut s: Simulation<3, Law<NoRolling, VanDerWaals, false>, VelocityVerlet> =
-        sim(p, &grains, vec![], Vector::<3>::zeros(), dt);
+    (sim(p, &grains, vec![], Vector::<3>::zeros(), dt), dt)
+}
+
+/// The overlap two free spheres settle at under their own attraction
+/// (`contact_attraction` as given), started touching at rest.
+fn resting_overlap(attraction: &str) -> f64 {
+    let mode = format!("material.contact_attraction=\"{attraction}\"");
+    let (mut s, dt) = touching_pair(&mode);
     s.run((0.02 / dt) as u64).unwrap();
     D - (s.particles.pos[1].x - s.particles.pos[0].x)
 }
@@ -397,14 +407,7 @@ fn a_fading_contact_attraction_rests_where_hertz_balances_the_hamaker_law_at_the
 /// slid past each other after `duration`.
 fn sheared_pair(limit_load: &str, press: f64, shear: f64, duration: f64) -> f64 {
     let load = format!("material.limit_load=\"{limit_load}\"");
-    let p = parts(&["material.youngs_modulus=1e8", &load]);
-    let grains = [
-        (Vector::<3>::new(-0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
-        (Vector::<3>::new(0.5 * D, 0.0, 0.0), Vector::<3>::zeros()),
-    ];
-    let dt = collision_time(&p.0, 0.1) / 100.0;
-    let mut s: Simulation<3, Law<NoRolling, VanDerWaals, false>, VelocityVerlet> =
-        sim(p, &grains, vec![], Vector::<3>::zeros(), dt);
+    let (mut s, dt) = touching_pair(&load);
     s.particles
         .set_load(0, Vector::<3>::new(press, -shear, 0.0));
     s.particles
