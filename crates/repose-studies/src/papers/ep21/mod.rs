@@ -205,9 +205,12 @@ fn sweeps() -> Vec<StudySweep> {
             samples: 2,
             priority: 0,
             reduced: Reduced {
+                // Dry spheres roll off a 10 d plate (a dozen of 250 stay):
+                // a dry heap needs the study's 20 d plate to hold a base layer.
                 base: {
-                    let mut b = reduced_heap(0.0);
+                    let mut b = heap_base(0.0, 20.0, 1500);
                     b["grains"]["diameter"] = json!(1e-3);
+                    b["heap"]["settle_max"] = json!(60.0);
                     b
                 },
                 axes: axes(vec![("gravity", gravities(&[0.165, 10.0]))]),
