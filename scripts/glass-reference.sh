@@ -20,7 +20,7 @@ mkdir -p data/glass
 if [ $# -eq 0 ]; then set -- sweeps/glass/*.toml; fi
 
 "$REPOSE" serve --database "sqlite://$STORE" --listen "127.0.0.1:$PORT" \
-  --checkpoint-every 300 > data/glass/serve.log 2>&1 &
+  --checkpoint-every 300 --workers "${WORKERS:-1}" > data/glass/serve.log 2>&1 &
 SERVE=$!
 trap 'kill $SERVE 2>/dev/null; wait $SERVE 2>/dev/null || true' EXIT
 for _ in $(seq 1 50); do

@@ -80,9 +80,31 @@ impl VelocityVerlet {
         Dim<D>: Space<D>,
     {
         for i in 0..p.omega.len() {
+            if p.resting.get(i) == Some(&true) {
+                continue;
+            }
             let kick = p.torque[i] * (half * p.inv_inertia[i]);
             p.omega[i] += kick;
         }
+    }
+
+    /// Half a kick of the velocities, and with `dt` a drift of the
+    /// positions; grains at rest stay where they are.
+    fn kick_drift<const D: usize>(p: &mut Particles<D>, half: f64, dt: Option<f64>)
+    where
+        Dim<D>: Space<D>,
+    {
+        let resting = std::mem::take(&mut p.resting);
+        for i in 0..p.len() {
+            if resting.get(i) == Some(&true) {
+                continue;
+            }
+            p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+            if let Some(dt) = dt {
+                p.pos[i] += p.vel[i] * dt;
+            }
+        }
+        p.resting = resting;
     }
 }
 
@@ -99,9 +121,13 @@ where
     #[inline]
     fn predict(&mut self, p: &mut Particles<D>, dt: f64) {
         let half = 0.5 * dt;
-        for i in 0..p.len() {
-            p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
-            p.pos[i] += p.vel[i] * dt;
+        if p.tracks_rest() {
+            Self::kick_drift(p, half, Some(dt));
+        } else {
+            for i in 0..p.len() {
+                p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+                p.pos[i] += p.vel[i] * dt;
+            }
         }
         if p.rotating() {
             Self::spin_kick(p, half);
@@ -111,8 +137,12 @@ where
     #[inline]
     fn correct(&mut self, p: &mut Particles<D>, dt: f64) {
         let half = 0.5 * dt;
-        for i in 0..p.len() {
-            p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+        if p.tracks_rest() {
+            Self::kick_drift(p, half, None);
+        } else {
+            for i in 0..p.len() {
+                p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+            }
         }
         if p.rotating() {
             Self::spin_kick(p, half);

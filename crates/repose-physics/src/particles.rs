@@ -75,6 +75,16 @@ where
     /// Constant external force on each grain besides gravity (empty unless
     /// some grain carries one: see [`Particles::set_load`]).
     pub load: Vec<Vector<D>>,
+    /// Whether each grain is at rest: neither integrated nor pushed by its
+    /// resting neighbours until something wakes it (empty unless the
+    /// simulation puts grains to rest: see `Simulation::set_rest`).
+    #[serde(default)]
+    pub resting: Vec<bool>,
+    /// Steps each awake grain has been still in a row (empty likewise).
+    #[serde(default)]
+    pub still: Vec<u32>,
+    #[serde(default)]
+    rest_tracked: bool,
     rotating: bool,
     next_id: u32,
 }
@@ -106,6 +116,9 @@ where
             torque: Vec::new(),
             inv_inertia: Vec::new(),
             load: Vec::new(),
+            resting: Vec::new(),
+            still: Vec::new(),
+            rest_tracked: false,
             rotating,
             next_id: 0,
         }
@@ -133,6 +146,23 @@ where
                     .map(|(m, a)| 1.0 / (0.4 * m * a * a)),
             );
         }
+    }
+
+    /// Starts or stops keeping track of which grains are at rest (every
+    /// grain starts awake).
+    pub fn track_rest(&mut self, on: bool) {
+        self.rest_tracked = on;
+        self.resting.clear();
+        self.still.clear();
+        if on {
+            self.resting.resize(self.len(), false);
+            self.still.resize(self.len(), 0);
+        }
+    }
+
+    /// Whether the grains' rest is tracked.
+    pub fn tracks_rest(&self) -> bool {
+        self.rest_tracked
     }
 
     pub fn len(&self) -> usize {
@@ -172,6 +202,10 @@ where
         }
         if !self.load.is_empty() {
             self.load.push(Vector::zeros());
+        }
+        if self.rest_tracked {
+            self.resting.push(false);
+            self.still.push(0);
         }
         self.next_id = self.next_id.max(id + 1);
     }
@@ -224,6 +258,10 @@ where
         if !self.load.is_empty() {
             filter(&mut self.load, keep);
         }
+        if self.rest_tracked {
+            filter(&mut self.resting, keep);
+            filter(&mut self.still, keep);
+        }
     }
 
     /// Reorders the grains: the grain at new index `k` is the one that was
@@ -245,6 +283,8 @@ where
         apply(&mut self.torque, order);
         apply(&mut self.inv_inertia, order);
         apply(&mut self.load, order);
+        apply(&mut self.resting, order);
+        apply(&mut self.still, order);
     }
 
     /// Translational kinetic energy.

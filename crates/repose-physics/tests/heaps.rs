@@ -1,12 +1,13 @@
 //! Poured heaps and packed columns of spheres (Elekes & Parteli): the
 //! protocols end in a measured heap or a recorded outcome, periodic faces
-//! are seamless, and neither threads nor the spatial renumbering of grains
-//! changes what a scene computes. Small, softened scenes: a paper-stiff
+//! are seamless, neither threads nor the spatial renumbering of grains
+//! changes what a scene computes, and grains put to rest stay put until a
+//! moving grain reaches them. Small, softened scenes: a paper-stiff
 //! heap costs 10¹¹ particle-steps.
 
 use repose_physics::contact::{Epsd2, NoCohesion};
 use repose_physics::dim::Vector;
-use repose_physics::engine::Simulation;
+use repose_physics::engine::{RestRule, Simulation};
 use repose_physics::integrate::VelocityVerlet;
 use repose_physics::models::elekes_parteli::{self, law, Law, Parts};
 use repose_physics::particles::Particles;
@@ -344,4 +345,83 @@ fn renumbering_grains_in_space_keeps_every_contact_and_its_springs() {
     );
     // and the run goes on from there
     s.run(100).unwrap();
+}
+
+/// A grain on the floor comes to rest after the rule's still steps; at rest
+/// it does not move by a bit, a grain that lands on it fast wakes it, and a
+/// grain that creeps onto it below the rule's speed does not.
+#[test]
+fn a_grain_at_rest_stays_put_until_a_moving_grain_wakes_it() {
+    let d = 1e-3;
+    // A tenth of √(g d): a grain settling into its contact with the one
+    // below (by the overlap its weight presses, 0.2 µm here) is slower.
+    // Still for 4 ms, twice as long as a grain in flight is that slow.
+    let rule = RestRule {
+        speed: 1e-2,
+        steps: 2000,
+    };
+    let on_floor = Vector::<3>::new(0.0, 0.0, 0.5 * d);
+    let mut s = engine(&[(on_floor, Vector::<3>::zeros())], 9.81, true);
+    s.set_rest(Some(rule));
+    let mut steps = 0;
+    while s.resting() == 0 {
+        s.run(1).unwrap();
+        steps += 1;
+        assert!(steps < 50_000, "never came to rest");
+    }
+    assert!(steps >= rule.steps as usize, "at rest after {steps} steps");
+    let rested = s.particles.pos[0];
+    s.run(5000).unwrap();
+    assert_eq!(s.particles.pos[0], rested, "a grain at rest does not move");
+    assert_eq!(s.particles.vel[0], Vector::<3>::zeros());
+
+    // A grain set down beside it on the floor, creeping towards it at a
+    // hundredth of the rule's speed: the resting grain is not woken.
+    let side = rested - Vector::<3>::new(d, 0.0, 0.0);
+    s.insert(
+        side,
+        Vector::<3>::new(1e-4, 0.0, 0.0),
+        0.5 * d,
+        s.particles.mass[0],
+    );
+    s.run(2000).unwrap();
+    assert!(s.particles.resting[0], "woken by a creeping grain");
+    assert_eq!(s.particles.pos[0], rested);
+
+    // A third grain dropped from three diameters up lands on its
+    // shoulder at about 0.2 m/s.
+    let high = rested + Vector::<3>::new(0.9 * d, 0.0, 3.0 * d);
+    s.insert(high, Vector::<3>::zeros(), 0.5 * d, s.particles.mass[0]);
+    let mut woken = false;
+    for _ in 0..20_000 {
+        s.run(1).unwrap();
+        woken |= !s.particles.resting[0];
+    }
+    assert!(woken, "the impact woke the grain it struck");
+    assert_ne!(s.particles.pos[0], rested, "and they moved");
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn grains_at_rest_change_nothing_between_one_thread_and_two() {
+    let rule = RestRule {
+        speed: 0.01,
+        steps: 200,
+    };
+    let mut one = bed();
+    let mut two = bed();
+    two.set_threads(2).unwrap();
+    two.min_shared_pairs = 0;
+    for s in [&mut one, &mut two] {
+        s.set_rest(Some(rule));
+        s.sort_every = 500;
+        s.run(12_000).unwrap();
+    }
+    println!("{} of 1200 grains at rest", one.resting());
+    assert!(one.resting() > 100);
+    assert_eq!(one.particles.resting, two.particles.resting);
+    assert_eq!(one.particles.pos, two.particles.pos);
+    assert_eq!(one.particles.vel, two.particles.vel);
+    assert_eq!(one.particles.omega, two.particles.omega);
+    assert_eq!(one.neighbors.history, two.neighbors.history);
 }

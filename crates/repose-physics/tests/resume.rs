@@ -194,3 +194,9 @@ fn a_checkpoint_of_another_scene_or_damaged_is_set_aside() {
     assert!(obs.resumed[0].as_ref().unwrap_err().contains("unreadable"));
     assert_eq!(numbers(&r), numbers(&whole));
 }
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_heap_with_grains_at_rest_resumes_bit_for_bit_with_their_rest() {
+    resumes_bit_for_bit(&format!("{HEAP}[rest]\nspeed = 0.05\ntime = 0.5\n"), 3);
+}

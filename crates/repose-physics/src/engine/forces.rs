@@ -31,16 +31,22 @@ where
             .pool
             .clone()
             .filter(|_| self.neighbors.pairs.len() >= self.min_shared_pairs);
-        let worst = match (pool, self.periodic.is_some()) {
-            (Some(pool), _) => self.pair_forces_shared(&pool),
-            (None, false) => self.pair_forces_serial::<false>(),
-            (None, true) => self.pair_forces_serial::<true>(),
+        if self.rest.is_some() {
+            self.wake.resize(self.particles.len());
+        }
+        let worst = match (pool, self.periodic.is_some(), self.rest.is_some()) {
+            (Some(pool), _, _) => self.pair_forces_shared(&pool),
+            (None, false, false) => self.pair_forces_serial::<false, false>(),
+            (None, true, false) => self.pair_forces_serial::<true, false>(),
+            (None, false, true) => self.pair_forces_serial::<false, true>(),
+            (None, true, true) => self.pair_forces_serial::<true, true>(),
         };
         self.overlap_guard(worst)
     }
 
-    /// Returns the largest overlap fraction and its pair.
-    fn pair_forces_serial<const PERIODIC: bool>(&mut self) -> (f64, usize) {
+    /// Returns the largest overlap fraction and its pair. With `REST`, a
+    /// pair of two resting grains is skipped and the others note whom they wake.
+    fn pair_forces_serial<const PERIODIC: bool, const REST: bool>(&mut self) -> (f64, usize) {
         let p = &mut self.particles;
         for i in 0..p.len() {
             p.force[i] = self.gravity * p.mass[i];
@@ -56,8 +62,12 @@ where
         let mut worst = (0.0f64, 0usize);
         let nl = &mut self.neighbors;
         let shifts = &nl.shifts;
+        let wake_speed2 = self.rest.map_or(0.0, |r| r.speed * r.speed);
         for (k, (&[i, j], history)) in nl.pairs.iter().zip(nl.history.iter_mut()).enumerate() {
             let (i, j) = (i as usize, j as usize);
+            if REST && p.resting[i] && p.resting[j] {
+                continue;
+            }
             let r = if PERIODIC {
                 p.pos[i] - p.pos[j] - shifts[k]
             } else {
@@ -66,6 +76,9 @@ where
             if let Some((response, fraction)) = pair_response(&law, p, i, j, r, history, dt) {
                 if fraction > worst.0 {
                     worst = (fraction, k);
+                }
+                if REST {
+                    self.wake.note(&*p, i, j, wake_speed2);
                 }
                 apply(p, i, j, &response, L::ROTATES);
             }
@@ -98,6 +111,10 @@ where
             let history = &mut self.wall_contacts.history[w];
             for k in 0..cands.len() {
                 let i = cands[k] as usize;
+                if p.resting.get(i) == Some(&true) {
+                    // At rest on the wall: the contact keeps its spring.
+                    continue;
+                }
                 let dist = wall.distance(&p.pos[i]);
                 let overlap = p.radius[i] - dist;
                 if overlap <= 0.0 || !wall.covers(&p.pos[i]) {

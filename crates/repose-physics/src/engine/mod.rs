@@ -24,10 +24,12 @@ mod boundary;
 mod energy;
 mod forces;
 mod order;
+mod rest;
 mod share;
 mod state;
 
 pub use boundary::{Outlet, Periodic};
+pub use rest::RestRule;
 pub use state::{EngineState, StateOf};
 
 use crate::contact::ContactLaw;
@@ -176,6 +178,10 @@ where
     pool: Option<Arc<rayon::ThreadPool>>,
     /// How the pairs are shared among the threads, for the current list.
     shares: share::Shares,
+    /// When grains are put to rest (none: never; see [`RestRule`]).
+    rest: Option<RestRule>,
+    /// Grains the pair loop found to wake at the end of the step.
+    wake: rest::Wake,
 }
 
 /// How often (in steps) the outlet is checked when nothing else forces it.
@@ -225,6 +231,8 @@ where
             min_shared_pairs: 8192,
             pool: None,
             shares: share::Shares::default(),
+            rest: None,
+            wake: rest::Wake::default(),
         }
     }
 
@@ -298,6 +306,7 @@ where
         let (contacts_time, walls_time) = self.compute_forces_timed()?;
         let t3 = Instant::now();
         self.integrator.correct(&mut self.particles, self.dt);
+        self.update_rest();
         let t4 = Instant::now();
 
         self.time += self.dt;

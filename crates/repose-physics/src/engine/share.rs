@@ -15,6 +15,7 @@
 //!    pair adds its stored response to its first grain.
 
 use super::forces::{pair_response, worse};
+use super::rest::Wake;
 use super::Simulation;
 use crate::contact::{ContactLaw, Response};
 use crate::dim::{Dim, Space, Vector};
@@ -122,6 +123,7 @@ where
             pairs: &self.neighbors.pairs,
             shifts: &self.neighbors.shifts,
             parts: &self.shares.parts,
+            rest: self.rest.map(|r| (&self.wake, r.speed * r.speed)),
         };
         let history = &mut self.neighbors.history;
         let worst = pool.install(|| ctx.run(history, &mut force, &mut torque));
@@ -143,6 +145,9 @@ where
     pairs: &'a [[u32; 2]],
     shifts: &'a [Vector<D>],
     parts: &'a [Share],
+    /// With grains at rest: where to note whom a pair wakes, and the
+    /// squared speed that wakes.
+    rest: Option<(&'a Wake, f64)>,
 }
 
 /// Cuts `v` into consecutive pieces of the given ranges (empty if `v` is).
@@ -198,6 +203,31 @@ where
         crossing.iter().map(|c| c.1).fold(inner, worse)
     }
 
+    /// The response of pair `k` = `(i, j)`, as one thread computes it:
+    /// none for two resting grains (their spring keeps what it held).
+    #[inline(always)]
+    fn response(
+        &self,
+        k: usize,
+        i: usize,
+        j: usize,
+        history: &mut L::History,
+    ) -> Option<(Response<D>, f64)> {
+        if let Some((wake, speed2)) = self.rest {
+            if self.p.resting[i] && self.p.resting[j] {
+                return None;
+            }
+            let r = self.separation(k, i, j);
+            let found = pair_response(&self.law, self.p, i, j, r, history, self.dt);
+            if found.is_some() {
+                wake.note(self.p, i, j, speed2);
+            }
+            return found;
+        }
+        let r = self.separation(k, i, j);
+        pair_response(&self.law, self.p, i, j, r, history, self.dt)
+    }
+
     fn separation(&self, k: usize, i: usize, j: usize) -> Vector<D> {
         let r = self.p.pos[i] - self.p.pos[j];
         if self.shifts.is_empty() {
@@ -216,9 +246,8 @@ where
             .map(|&k| {
                 let [i, j] = self.pairs[k];
                 let (i, j) = (i as usize, j as usize);
-                let r = self.separation(k, i, j);
                 let h = &mut history[k - share.pairs.start];
-                let found = pair_response(&self.law, self.p, i, j, r, h, self.dt);
+                let found = self.response(k, i, j, h);
                 if let Some((_, fraction)) = found {
                     worst = worse(worst, (fraction, k));
                 }
@@ -272,9 +301,8 @@ where
                 c += 1;
                 continue;
             }
-            let r = self.separation(k, i, j);
             let h = &mut history[k - share.pairs.start];
-            if let Some((resp, fraction)) = pair_response(&self.law, p, i, j, r, h, self.dt) {
+            if let Some((resp, fraction)) = self.response(k, i, j, h) {
                 worst = worse(worst, (fraction, k));
                 force[i - g0] += resp.force;
                 force[j - g0] -= resp.force;

@@ -2,7 +2,7 @@
 //! onto a square plate with open edges, and the angle of repose is read off
 //! the two side views of the settled heap.
 
-use super::pour::{self, Placer, Region, Scales};
+use super::pour::{self, Placer, Region, RestSpec, Scales};
 use super::runner::{Findings, Runner, Stop};
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
@@ -208,7 +208,7 @@ impl Protocol for Heap {
     }
 
     fn sections(&self) -> Vec<SectionDecl> {
-        vec![SectionDecl::of::<HeapSpec>()]
+        vec![SectionDecl::of::<HeapSpec>(), SectionDecl::of::<RestSpec>()]
     }
 
     fn metrics(&self) -> &'static [Metric] {
@@ -259,8 +259,9 @@ impl EngineJob<3> for Job<'_> {
     type Output = RunReport;
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> RunReport {
-        let sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
+        let mut sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
         let s = self.scales;
+        RestSpec::apply(self.scene, &s, &mut sim);
         let mut run = Runner::new(
             sim,
             self.scene,

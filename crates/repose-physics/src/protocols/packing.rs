@@ -2,7 +2,7 @@
 //! rest at a low solid fraction in a tall column, periodic sideways, settle
 //! on a plate; the packing fraction is read in the middle of the bed.
 
-use super::pour::{self, Placer, Region, Scales};
+use super::pour::{self, Placer, Region, RestSpec, Scales};
 use super::runner::{Findings, Runner};
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
@@ -154,7 +154,10 @@ impl Protocol for Packing {
     }
 
     fn sections(&self) -> Vec<SectionDecl> {
-        vec![SectionDecl::of::<PackingSpec>()]
+        vec![
+            SectionDecl::of::<PackingSpec>(),
+            SectionDecl::of::<RestSpec>(),
+        ]
     }
 
     fn metrics(&self) -> &'static [Metric] {
@@ -206,7 +209,8 @@ impl EngineJob<3> for Job<'_> {
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> Self::Output {
         let s = self.scales;
-        let sim = column::<L, I>(self.scene, &self.spec, &self.grains, s.d, laws)?;
+        let mut sim = column::<L, I>(self.scene, &self.spec, &self.grains, s.d, laws)?;
+        RestSpec::apply(self.scene, &s, &mut sim);
         let mut run = Runner::new(
             sim,
             self.scene,

@@ -6,13 +6,14 @@
 use super::runner::{Runner, Stop};
 use crate::contact::ContactLaw;
 use crate::dim::Vector;
-use crate::integrate::Integrator;
+use crate::engine::{RestRule, Simulation};
+use crate::integrate::{Integrator, Scheme};
 use crate::models::elekes_parteli::Grains;
 use crate::preset::Preset;
 use crate::report::Phase;
-use crate::scene::{Checks, Scene, SceneError};
+use crate::scene::{Checks, Scene, SceneError, Section};
 use crate::setup::Stream;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;
 
@@ -43,6 +44,75 @@ impl Scales {
     /// The translational kinetic energy per grain below which a pile is at rest.
     pub fn rest_energy(&self, per_mgd: f64) -> f64 {
         per_mgd * self.mass * self.g * self.d
+    }
+}
+
+/// Grains at rest (`engine::RestRule`): a grain that has stayed slower than
+/// `speed` for `time` is no longer integrated until a faster grain touches
+/// it. Off unless `speed` is above zero.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RestSpec {
+    /// Speed below which a grain is still, √(g d); 0 puts no grain to rest.
+    pub speed: f64,
+    /// How long a grain must stay still before it is put to rest, √(d/g).
+    pub time: f64,
+}
+
+impl Default for RestSpec {
+    fn default() -> Self {
+        RestSpec {
+            speed: 0.0,
+            time: 1.0,
+        }
+    }
+}
+
+impl Section for RestSpec {
+    const KEY: &'static str = "rest";
+    const ABOUT: &'static str =
+        "grains at rest: stop integrating grains still for a while until a moving grain touches them (speed in √(g d), time in √(d/g); speed 0 = off)";
+
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        c.non_negative("rest.speed", self.speed);
+        c.positive("rest.time", self.time);
+        if self.speed > 0.0 && self.time < 2.0 * self.speed {
+            // A grain in flight is that slow for 2 speed/g at the top of its
+            // arc (or as it starts to fall): it must not be put to rest there.
+            c.fail(
+                "rest.time",
+                format!(
+                    "must be at least twice rest.speed ({}): a grain in flight is slower than rest.speed for up to that long",
+                    2.0 * self.speed
+                ),
+            );
+        }
+        if self.speed > 0.0 && scene.numerics.integrator != Scheme::Verlet {
+            c.fail(
+                "rest.speed",
+                "grains are put to rest only with numerics.integrator = \"verlet\"",
+            );
+        }
+    }
+}
+
+impl RestSpec {
+    /// Puts the scene's rule on a simulation stepping by `sim.dt`.
+    pub fn apply<L: ContactLaw<3>, I: Integrator<3>>(
+        scene: &Scene,
+        scales: &Scales,
+        sim: &mut Simulation<3, L, I>,
+    ) {
+        let spec: RestSpec = scene.section().unwrap_or_default();
+        if spec.speed > 0.0 {
+            let steps = (spec.time * scales.time / sim.dt)
+                .ceil()
+                .clamp(1.0, u32::MAX as f64);
+            sim.set_rest(Some(RestRule {
+                speed: spec.speed * (scales.g * scales.d).sqrt(),
+                steps: steps as u32,
+            }));
+        }
     }
 }
 
