@@ -277,6 +277,16 @@ fn summary(r: &RunReport) -> String {
             r.particle_steps_per_second / 1e6
         ),
     ));
+    let c = &r.counters;
+    if c.resting_steps > 0 {
+        lines.push((
+            "at rest".into(),
+            format!(
+                "{:.1} % of the particle-steps (grains put to rest: [rest])",
+                100.0 * c.resting_steps as f64 / c.particle_steps.max(1) as f64
+            ),
+        ));
+    }
     let mut options = format!(
         "preset {}, integrator {}",
         r.options.preset.as_deref().unwrap_or("none"),

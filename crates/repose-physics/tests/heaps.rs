@@ -425,3 +425,37 @@ fn grains_at_rest_change_nothing_between_one_thread_and_two() {
     assert_eq!(one.particles.omega, two.particles.omega);
     assert_eq!(one.neighbors.history, two.neighbors.history);
 }
+
+/// The options that cannot hold are refused, naming the field: grains at
+/// rest on the Gear integrator or put to rest in mid-flight, and a
+/// restitution raised past 1 by softening too far.
+#[test]
+fn options_that_cannot_hold_are_refused_by_field() {
+    let refused = |extra: &[&str]| {
+        let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+        let err = Scene::from_toml(SMALL_HEAP, &o).unwrap_err();
+        err.errors
+            .iter()
+            .map(|e| e.field.clone())
+            .collect::<Vec<_>>()
+    };
+    let gear = refused(&["rest.speed=0.01", "numerics.integrator=\"gear5\""]);
+    assert!(gear.contains(&"rest.speed".to_string()), "{gear:?}");
+    let short = refused(&["rest.speed=0.1", "rest.time=0.1"]);
+    assert_eq!(short, vec!["rest.time".to_string()]);
+    // Y = 6.3 MPa with glass's γ: ε 0.2 × 10000^{1/5} = 1.26.
+    let bouncy = refused(&[
+        "material.surface_energy=0.05",
+        "material.youngs_modulus=6.3e6",
+        "material.cohesion_scaling=\"restitution\"",
+    ]);
+    assert_eq!(bouncy, vec!["material.cohesion_scaling".to_string()]);
+    // A thousandfold is still below 1: accepted.
+    let o = [
+        "material.surface_energy=0.05",
+        "material.youngs_modulus=6.3e7",
+        "material.cohesion_scaling=\"restitution\"",
+    ]
+    .map(String::from);
+    assert!(Scene::from_toml(SMALL_HEAP, &o).is_ok());
+}

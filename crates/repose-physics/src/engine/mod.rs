@@ -126,6 +126,10 @@ pub struct StageCounters {
     pub list_builds: u64,
     /// Sum over steps of the number of grains (the throughput unit).
     pub particle_steps: u64,
+    /// Of those, the grains at rest (see [`RestRule`]): not integrated,
+    /// and their pairs with each other not evaluated.
+    #[serde(default)]
+    pub resting_steps: u64,
     pub steps: u64,
 }
 
@@ -306,7 +310,7 @@ where
         let (contacts_time, walls_time) = self.compute_forces_timed()?;
         let t3 = Instant::now();
         self.integrator.correct(&mut self.particles, self.dt);
-        self.update_rest();
+        self.counters.resting_steps += self.update_rest();
         let t4 = Instant::now();
 
         self.time += self.dt;

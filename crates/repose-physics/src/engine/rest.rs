@@ -91,15 +91,18 @@ where
     }
 
     /// The end of a step: wakes the grains flagged by the pair loop, and
-    /// puts to rest those that have been still long enough.
-    pub(super) fn update_rest(&mut self) {
+    /// puts to rest those that have been still long enough. Returns how
+    /// many grains rested during the step.
+    pub(super) fn update_rest(&mut self) -> u64 {
         let Some(rule) = self.rest else {
-            return;
+            return 0;
         };
+        let mut rested = 0;
         let p = &mut self.particles;
         let limit = rule.speed * rule.speed;
         for i in 0..p.len() {
             if p.resting[i] {
+                rested += 1;
                 if self.wake.take(i) {
                     p.resting[i] = false;
                     p.still[i] = 0;
@@ -125,5 +128,6 @@ where
                 }
             }
         }
+        rested
     }
 }

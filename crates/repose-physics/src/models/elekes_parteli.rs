@@ -205,6 +205,13 @@ pub enum CohesionScaling {
     /// `γ (Y/Y_true)^{2/5}`: a collision keeps the sticking speed of the
     /// real material (Chen, Liu & Li 2018), at the cost of a weaker cohesive force.
     Sticking,
+    /// `γ` unchanged and the restitution raised to `ε (Y_true/Y)^{1/5}`
+    /// (cohesive materials only): the attraction holds as hard as the real
+    /// material's, and the raised restitution takes back most of the rise
+    /// of the speed below which colliding grains stick (not all of it, and
+    /// at the cost of bouncier collisions: measured in docs/model-3d.md).
+    /// Possible while that restitution stays below 1.
+    Restitution,
 }
 
 /// Young's modulus of glass beads (Table 1), Pa.
@@ -289,7 +296,7 @@ impl Section for Material {
     const ABOUT: &'static str =
         "elastic constants, restitution, friction, rolling friction, surface energy and the model options";
 
-    fn check(&self, _scene: &Scene, c: &mut Checks) {
+    fn check(&self, scene: &Scene, c: &mut Checks) {
         if let Some(y) = self.youngs_modulus {
             c.positive("material.youngs_modulus", y);
         }
@@ -308,6 +315,7 @@ impl Section for Material {
         if self.restitution > 1.0 {
             c.fail("material.restitution", "must not exceed 1");
         }
+        self.check_scaled_restitution(scene, c);
         c.positive("material.impact_speed", self.impact_speed);
         c.non_negative("material.friction", self.friction);
         c.non_negative("material.rolling_friction", self.rolling_friction);
@@ -324,6 +332,27 @@ impl Section for Material {
 }
 
 impl Material {
+    /// A restitution raised by `cohesion_scaling = "restitution"` must stay
+    /// below 1: softer than that, no collision dissipates enough.
+    fn check_scaled_restitution(&self, scene: &Scene, c: &mut Checks) {
+        let Ok(grains) = scene.section::<Grains>() else {
+            return;
+        };
+        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let y = self.modulus(&grains, g);
+        let e = self.restitution_at(y);
+        if y > 0.0 && e >= 1.0 {
+            c.fail(
+                "material.cohesion_scaling",
+                format!(
+                    "\"restitution\" would raise the restitution to {e:.2} at Y = {y:.3e} Pa: soften less (at most {:.0}× for ε = {})",
+                    self.restitution.powf(-5.0),
+                    self.restitution
+                ),
+            );
+        }
+    }
+
     /// The modulus simulated: the given one; or softened to the larger of
     /// `κ ρ g d` and `κ_c π γ / d` (those set), never stiffer than the true
     /// modulus; or the true modulus.
@@ -352,7 +381,7 @@ impl Material {
     pub fn effective(&self, grains: &Grains, g: f64) -> Material {
         let y = self.modulus(grains, g);
         let gamma = match self.cohesion_scaling {
-            CohesionScaling::None => self.surface_energy,
+            CohesionScaling::None | CohesionScaling::Restitution => self.surface_energy,
             CohesionScaling::Sticking => self.surface_energy * (y / self.true_modulus).powf(0.4),
         };
         Material {
@@ -361,7 +390,19 @@ impl Material {
             kappa_cohesion: None,
             cohesion_scaling: CohesionScaling::None,
             surface_energy: gamma,
+            restitution: self.restitution_at(y),
             ..self.clone()
+        }
+    }
+
+    /// The restitution simulated at modulus `y`: the asked one, unless
+    /// `cohesion_scaling = "restitution"` raises it for a softened cohesive
+    /// material.
+    pub fn restitution_at(&self, y: f64) -> f64 {
+        if self.cohesion_scaling == CohesionScaling::Restitution && self.coheres() {
+            self.restitution * (self.true_modulus / y).powf(0.2)
+        } else {
+            self.restitution
         }
     }
 
