@@ -2,15 +2,19 @@
 //!
 //! A discrete-element engine for granular piles: grains with contact laws
 //! built from components, integrators, neighbour search, walls, and the
-//! protocols that measure a pile — for now those of Lee & Herrmann (1993),
-//! which measure the angle of repose θ_R, the tilting angle θ_T and the
-//! angle of marginal stability θ_MS — with the theory they are compared with.
+//! protocols that measure a pile, with the theory they are compared with:
+//! Lee & Herrmann's (1993) 2D piles (the angle of repose θ_R, the tilting
+//! angle θ_T and the angle of marginal stability θ_MS) and Elekes &
+//! Parteli's (2021) poured 3D heaps of cohesive spheres (θ_r) and packed
+//! columns (the packing fraction φ).
 //!
 //! ## Design
 //!
-//! * **Pure.** This crate knows nothing of databases, HTTP, threads or
-//!   async. A [`Scene`] goes in, a [`RunReport`] comes out; the same scene
-//!   and seed give the same numbers.
+//! * **Pure.** This crate knows nothing of databases, HTTP, files or
+//!   async. A [`Scene`] goes in, a [`RunReport`] comes out; the same scene,
+//!   seed and build give the same numbers. The only threads it starts are
+//!   a sample's own (`numerics.threads`), which share the pair loop without
+//!   changing a bit of the result.
 //! * **Plug-ins at the seams.** A protocol ([`protocols::Protocol`]) and a
 //!   contact model ([`models::Model`]) each live in one module and declare
 //!   what the rest of the project needs: their scene sections with defaults

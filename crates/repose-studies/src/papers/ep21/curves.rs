@@ -1,6 +1,6 @@
 //! The curves Elekes & Parteli fit to their heaps and packings, and the
-//! constants they quote (`../shared/DESIGN.md` §2). Lengths in µm, angles
-//! in degrees, g̃ = g / 9.81 m/s².
+//! constants they quote (eqs. 1–5 and fig. 5 of the paper). Lengths in µm,
+//! angles in degrees, g̃ = g / 9.81 m/s².
 
 use crate::fit::Model;
 

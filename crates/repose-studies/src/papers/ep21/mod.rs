@@ -1,5 +1,6 @@
-//! Elekes & Parteli (2021), *The angle of repose of cohesive grains under
-//! reduced and enhanced gravity*: poured heaps of glass beads over grain
+//! Elekes & Parteli (2021), *An expression for the angle of repose of dry
+//! cohesive granular materials on Earth and in planetary environments*
+//! (PNAS 118, e2107965118): poured heaps of glass beads over grain
 //! size d and gravity g (figures 2–4, the regime boundary), heaps without
 //! cohesion over g (fig. 3B) and packed columns (fig. 5), with the paper's
 //! fits made again on our data.
@@ -29,7 +30,7 @@ use std::collections::BTreeMap;
 
 pub static PAPER: Paper = Paper {
     key: "ep21",
-    title: "Elekes & Parteli (2021): the angle of repose of cohesive grains under reduced and enhanced gravity",
+    title: "Elekes & Parteli (2021): an expression for the angle of repose of dry cohesive granular materials on Earth and in planetary environments",
     citation: "F. Elekes and E. J. R. Parteli, Proc. Natl. Acad. Sci. USA 118, e2107965118 (2021)",
     sweeps,
     figures: figures::figures,
