@@ -1,8 +1,9 @@
 //! `repose bench`: particle-steps per second of the fill-and-release scene,
 //! single thread, settled and flowing, for each integrator, with the time
-//! of each stage. The scenes and step counts match the LAMMPS peer runs in
-//! `../shared/peers` (dt = 1e-5 s, N = 25·W·H), so the two can be compared
-//! side by side; `--lammps FILE` reads that run's CSV and prints the ratio.
+//! of each stage. The scenes and step counts match the LAMMPS peer runs of
+//! `bench/lammps-pile.sh` (dt = 1e-5 s, N = 25·W·H), so the two can be
+//! compared side by side; `--lammps FILE` reads that run's CSV and prints
+//! the ratio.
 
 use anyhow::Context;
 use repose_physics::bench::{throughput, PhaseThroughput};

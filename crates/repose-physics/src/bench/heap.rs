@@ -1,4 +1,4 @@
-//! The 3D heap of the LIGGGHTS peer benchmark (`../shared/peers/liggghts/in.heap`),
+//! The 3D heap of the LIGGGHTS peer benchmark (`bench/liggghts-heap.in`),
 //! built with this engine's Elekes–Parteli contacts: 2000 spheres of radii
 //! 1.8, 2.0 and 2.2 mm (25/50/25 %) poured at 4000 per second from a
 //! cylinder 12–15 cm above the floor of a 0.2 m square box, then settled.

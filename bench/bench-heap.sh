@@ -1,20 +1,31 @@
 #!/bin/bash
 # The 3D heap side by side with LIGGGHTS, one process at a time: the peer
-# run (../shared/peers/bench_liggghts.sh, `epsd2` rolling friction) and
+# run (bench/liggghts-heap.sh, `epsd2` rolling friction) and
 # `repose bench --heap` alternately, NTRIAL times; prints each trial's
 # particle-steps per second and ratio, and the medians.
 #
-#   apt-get install -y liggghts && cargo build --release
-#   NTRIAL=3 scripts/bench-heap.sh
+#   apt-get install -y liggghts && cargo build --release -p repose-cli
+#   NTRIAL=3 bench/bench-heap.sh
+#   NTRIAL=1 SCALE=0.05 bench/bench-heap.sh   # quick check, shortened runs
+#
+# Environment: OUT (default out/heap in the repository), REPOSE (default
+# target/release/repose), SCALE (factor on both programs' step counts),
+# LIGGGHTS (passed on to bench/liggghts-heap.sh).
 set -euo pipefail
-PEERS=${PEERS:-$(cd "$(dirname "$0")/../.." && pwd)/shared/peers}
-OUT=${OUTDIR:-$PWD/target/heap-bench}
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+OUT=${OUT:-$ROOT/out/heap}
 NTRIAL=${NTRIAL:-3}
-REPOSE=${REPOSE:-$PWD/target/release/repose}
+SCALE=${SCALE:-1}
+REPOSE=${REPOSE:-$ROOT/target/release/repose}
+if [ ! -x "$REPOSE" ]; then
+  echo "no repose program at $REPOSE: cargo build --release -p repose-cli, or set REPOSE" >&2
+  exit 1
+fi
 mkdir -p "$OUT"
 for t in $(seq 1 "$NTRIAL"); do
-  OUTDIR="$OUT/liggghts-$t" NTRIAL=1 "$PEERS/bench_liggghts.sh" > "$OUT/liggghts-$t.log"
-  "$REPOSE" bench --heap --json > "$OUT/repose-$t.json" 2> /dev/null
+  OUT="$OUT/liggghts-$t" NTRIAL=1 ROLLING=epsd2 SCALE="$SCALE" \
+    "$ROOT/bench/liggghts-heap.sh" > "$OUT/liggghts-$t.log"
+  "$REPOSE" bench --heap --scale "$SCALE" --json > "$OUT/repose-$t.json" 2> /dev/null
 done
 python3 - "$OUT" "$NTRIAL" <<'PY'
 import csv, json, statistics, sys
