@@ -4,7 +4,9 @@
 //! call the store and the studies, and shape the answer. [`app`] builds the
 //! router, so tests drive it without a network and `repose serve` mounts it
 //! on a socket. The OpenAPI document at `/api/openapi.json` is generated
-//! from the handlers and their types ([`openapi`]), so it cannot drift.
+//! from the handlers and their types and completed from the registries
+//! ([`openapi`]); `tests/contract.rs` holds the server to it with requests
+//! generated from the document itself.
 //!
 //! ```text
 //! curl -s localhost:8080/api/health
@@ -212,6 +214,22 @@ impl From<repose_store::StoreError> for ApiError {
     }
 }
 
+/// A query string the extractor cannot read (a repeated key, say): 400
+/// with the usual error body instead of axum's plain text.
+impl From<axum::extract::rejection::QueryRejection> for ApiError {
+    fn from(e: axum::extract::rejection::QueryRejection) -> Self {
+        ApiError::field(e.status(), "(query)", e.body_text())
+    }
+}
+
+/// A body that cannot be read (too large, broken off): its status with the
+/// usual error body.
+impl From<axum::extract::rejection::BytesRejection> for ApiError {
+    fn from(e: axum::extract::rejection::BytesRejection) -> Self {
+        ApiError::field(e.status(), "(body)", e.body_text())
+    }
+}
+
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let body = ErrorBody {
@@ -325,7 +343,9 @@ fn content_type(file: &str) -> &'static str {
 /// so no path outside the folder can be reached.
 #[utoipa::path(get, path = "/docs/{file}", tag = "reports",
     params(("file" = String, Path, description = "a report file: reproduction.md, speed-vs-accuracy.md and their SVG, CSV and JSON files")),
-    responses((status = 200, description = "the file (Markdown, SVG, CSV or JSON)"), (status = 404, body = ErrorBody)))]
+    responses((status = 200, description = "the file (Markdown, SVG, CSV or JSON)", content(
+        (String = "text/markdown"), (String = "image/svg+xml"), (String = "text/csv"), (Object = "application/json"))),
+        (status = 404, body = ErrorBody)))]
 async fn doc_file(State(s): State<AppState>, Path(file): Path<String>) -> Response {
     let Some((_, embedded)) = DOCS.iter().find(|(name, _)| *name == file) else {
         return ApiError::new(StatusCode::NOT_FOUND, format!("no report file `{file}`"))
@@ -347,10 +367,19 @@ async fn doc_file(State(s): State<AppState>, Path(file): Path<String>) -> Respon
         .into_response()
 }
 
+/// The results browser.
+#[utoipa::path(get, path = "/", tag = "reports",
+    responses((status = 200, description = "the page", content_type = "text/html", body = String)))]
 async fn index() -> Html<&'static str> {
     Html(include_str!("../../../web/index.html"))
 }
 
+/// A script or style sheet of the results browser.
+#[utoipa::path(get, path = "/static/{file}", tag = "reports",
+    params(("file" = String, Path, description = "a file of the page")),
+    responses((status = 200, description = "the file", content(
+        (String = "text/javascript"), (String = "text/css"))),
+        (status = 404, body = ErrorBody)))]
 async fn static_file(Path(file): Path<String>) -> Response {
     match WEB.iter().find(|(name, _, _)| *name == file) {
         Some((_, kind, body)) => (
@@ -375,6 +404,11 @@ pub struct Health {
     pub database: String,
 }
 
+/// How [`Health`] names a database backend.
+pub(crate) fn backend_name(backend: repose_store::Backend) -> String {
+    format!("{backend:?}").to_lowercase()
+}
+
 /// Service and database status.
 #[utoipa::path(get, path = "/api/health", tag = "service",
     responses((status = 200, body = Health), (status = 503, body = ErrorBody)))]
@@ -383,7 +417,7 @@ async fn health(State(s): State<AppState>) -> ApiResult<Json<Health>> {
     Ok(Json(Health {
         status: "ok".into(),
         engine: repose_physics::ENGINE.into(),
-        database: format!("{:?}", s.store.backend()).to_lowercase(),
+        database: backend_name(s.store.backend()),
     }))
 }
 

@@ -1,6 +1,19 @@
-//! The OpenAPI 3.1 document, generated from the handlers and their types.
+//! The OpenAPI 3.1 document: the contract between the server and its
+//! clients.
+//!
+//! It starts from what utoipa derives from the handlers and their types,
+//! then [`refine`] states what the types alone cannot: the names the
+//! registries accept (protocols, presets, metrics, papers, figures, report
+//! files), the parameters the handlers require, the bounds they check, the
+//! shape of axis values, and every status a route answers with. The test
+//! `tests/contract.rs` sends requests generated from this document and
+//! checks every answer against it.
 
-use axum::Json;
+mod refine;
+
+use axum::http::header;
+use axum::response::IntoResponse;
+use std::sync::OnceLock;
 use utoipa::OpenApi;
 
 #[derive(OpenApi)]
@@ -11,8 +24,11 @@ use utoipa::OpenApi;
                        per-sample results, per-point statistics, and the papers' figures with their theory curves."
     ),
     paths(
-        crate::health,
+        crate::index,
+        crate::static_file,
         crate::doc_file,
+        crate::health,
+        crate::openapi::serve,
         crate::studies::protocols,
         crate::studies::list,
         crate::studies::show,
@@ -34,11 +50,52 @@ use utoipa::OpenApi;
 )]
 pub struct ApiDoc;
 
-/// The document as JSON.
-pub fn document() -> serde_json::Value {
-    serde_json::to_value(ApiDoc::openapi()).unwrap_or(serde_json::Value::Null)
+/// The document, built once.
+fn built() -> &'static (serde_json::Value, String) {
+    static DOC: OnceLock<(serde_json::Value, String)> = OnceLock::new();
+    DOC.get_or_init(|| {
+        let mut doc = serde_json::to_value(ApiDoc::openapi()).unwrap_or(serde_json::Value::Null);
+        refine::apply(&mut doc);
+        let text = doc.to_string();
+        (doc, text)
+    })
 }
 
-pub(crate) async fn serve() -> Json<serde_json::Value> {
-    Json(document())
+/// The document as JSON.
+pub fn document() -> serde_json::Value {
+    built().0.clone()
+}
+
+/// This document.
+#[utoipa::path(get, path = "/api/openapi.json", tag = "service",
+    responses((status = 200, description = "the OpenAPI 3.1 document", body = Object)))]
+pub(crate) async fn serve() -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, "application/json")],
+        built().1.as_str(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_document_builds_with_every_refinement_in_place() {
+        let doc = document();
+        assert_eq!(doc["openapi"], "3.1.0");
+        let protocols = &doc["components"]["schemas"]["SweepSpec"]["properties"]["protocol"];
+        let names: Vec<&str> = protocols["enum"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_str())
+            .collect();
+        assert_eq!(names, repose_physics::protocols::names());
+        assert!(doc["paths"]["/api/sweeps/{id}/series"]["get"]["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["name"] == "x" && p["required"] == true));
+    }
 }

@@ -5,6 +5,7 @@
 use crate::sweeps::{enqueue, parse_body, points_of, require_sweep, Queued};
 use crate::{ApiError, ApiResult, AppState, ErrorBody};
 use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::Json;
@@ -159,13 +160,14 @@ pub struct QueueRequest {
 /// buttons and `repose reproduce` queue.
 #[utoipa::path(post, path = "/api/studies/{paper}/sweeps/{key}", tag = "studies",
     params(("paper" = String, Path), ("key" = String, Path, description = "the study sweep, e.g. fig347")),
-    request_body(content = Option<QueueRequest>),
-    responses((status = 201, body = Queued), (status = 404, body = ErrorBody), (status = 422, body = ErrorBody)))]
+    request_body(content = QueueRequest, description = "optional: an empty body queues the paper's sweep at the standard fidelity"),
+    responses((status = 201, body = Queued), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody), (status = 422, body = ErrorBody)))]
 pub async fn queue(
     State(s): State<AppState>,
     Path((paper_key, key)): Path<(String, String)>,
-    body: Bytes,
+    body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
+    let body = body?;
     let p = paper(&paper_key)?;
     let sweep = p.sweep(&key).ok_or_else(|| {
         ApiError::new(
@@ -190,9 +192,11 @@ pub async fn queue(
 }
 
 #[derive(Debug, Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Query)]
 pub struct Bindings {
     /// Which sweep to read for each study sweep, as `key:id,key:id`;
-    /// by default the newest sweep queued for it.
+    /// by default the newest sweep queued for it (400 if not written so,
+    /// 404 if a named sweep does not exist).
     sweeps: Option<String>,
 }
 
@@ -255,12 +259,13 @@ async fn study_data(
 /// with its theory curves and the values the paper quotes.
 #[utoipa::path(get, path = "/api/studies/{paper}/figures/{figure}", tag = "studies",
     params(("paper" = String, Path), ("figure" = String, Path), Bindings),
-    responses((status = 200, body = FigureData), (status = 404, body = ErrorBody)))]
+    responses((status = 200, body = FigureData), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
 pub async fn figure(
     State(s): State<AppState>,
     Path((paper_key, key)): Path<(String, String)>,
-    Query(bindings): Query<Bindings>,
+    bindings: Result<Query<Bindings>, QueryRejection>,
 ) -> ApiResult<Json<FigureData>> {
+    let Query(bindings) = bindings?;
     let p = paper(&paper_key)?;
     let fig = p.figure(&key).ok_or_else(|| {
         ApiError::new(
@@ -285,12 +290,13 @@ pub struct ComparisonAnswer {
 /// The paper's stated results against ours, from the newest sweeps (or those named).
 #[utoipa::path(get, path = "/api/studies/{paper}/comparison", tag = "studies",
     params(("paper" = String, Path), Bindings),
-    responses((status = 200, body = ComparisonAnswer), (status = 404, body = ErrorBody)))]
+    responses((status = 200, body = ComparisonAnswer), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
 pub async fn comparison(
     State(s): State<AppState>,
     Path(paper_key): Path<String>,
-    Query(bindings): Query<Bindings>,
+    bindings: Result<Query<Bindings>, QueryRejection>,
 ) -> ApiResult<Json<ComparisonAnswer>> {
+    let Query(bindings) = bindings?;
     let p = paper(&paper_key)?;
     let keys: Vec<String> = (p.sweeps)().iter().map(|s| s.key.to_string()).collect();
     let figures = (p.figures)();

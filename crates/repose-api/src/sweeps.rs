@@ -3,6 +3,7 @@
 
 use crate::{ApiError, ApiResult, AppState, ErrorBody};
 use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
@@ -110,9 +111,9 @@ pub(crate) async fn enqueue(
     responses((status = 201, body = Queued), (status = 400, body = ErrorBody), (status = 422, body = ErrorBody)))]
 pub async fn create_sweep(
     State(s): State<AppState>,
-    body: Bytes,
+    body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
-    let spec: SweepSpec = parse_body(&body)?;
+    let spec: SweepSpec = parse_body(&body?)?;
     enqueue(&s.store, &spec).await
 }
 
@@ -187,8 +188,9 @@ pub async fn retry_sweep(
 }
 
 #[derive(Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Query)]
 pub struct FormatQuery {
-    /// `json` (the default) or `csv`.
+    /// `json` (the default) or `csv`; nothing else, not even an empty value.
     format: Option<String>,
 }
 
@@ -238,8 +240,9 @@ pub(crate) fn declared(protocol: &str) -> Vec<String> {
 pub async fn samples(
     State(s): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<FormatQuery>,
+    q: Result<Query<FormatQuery>, QueryRejection>,
 ) -> ApiResult<Response> {
+    let Query(q) = q?;
     let format = format_of(&q)?;
     let sweep = require_sweep(&s.store, &id).await?;
     let rows = s.store.samples(&id).await?;
@@ -283,8 +286,9 @@ pub(crate) async fn points_of(store: &Store, sweep: &SweepInfo) -> ApiResult<Vec
 pub async fn points(
     State(s): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<FormatQuery>,
+    q: Result<Query<FormatQuery>, QueryRejection>,
 ) -> ApiResult<Response> {
+    let Query(q) = q?;
     let format = format_of(&q)?;
     let sweep = require_sweep(&s.store, &id).await?;
     let rows = points_of(&s.store, &sweep).await?;
@@ -295,12 +299,15 @@ pub async fn points(
 }
 
 #[derive(Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Query)]
 pub struct SeriesQuery {
-    /// A swept scene key, e.g. `contact.mu`.
+    /// Required: a key the sweep varies, e.g. `contact.mu` (400 without
+    /// it, 422 if the sweep does not vary it).
     x: Option<String>,
-    /// A second swept key: one series per value.
+    /// A second key the sweep varies: one series per value.
     series: Option<String>,
-    /// A metric of the sweep's protocol (default: its headline metric).
+    /// A metric of the sweep's protocol (default: its headline metric; 422
+    /// for a metric no sample of the sweep measured).
     y: Option<String>,
 }
 
@@ -311,8 +318,9 @@ pub struct SeriesQuery {
 pub async fn series(
     State(s): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<SeriesQuery>,
+    q: Result<Query<SeriesQuery>, QueryRejection>,
 ) -> ApiResult<Json<SeriesAnswer>> {
+    let Query(q) = q?;
     let x = q.x.ok_or_else(|| {
         ApiError::field(
             StatusCode::BAD_REQUEST,

@@ -5,6 +5,8 @@
 //! Every answer must be a 2xx, 3xx or 4xx; a 5xx or a panic fails the test.
 //! The generator is ChaCha8 from a fixed seed, so a failure repeats.
 
+mod common;
+
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use http_body_util::BodyExt;
@@ -328,55 +330,19 @@ async fn send(
     status
 }
 
-async fn get_json(store: &Store, uri: &str) -> Value {
-    let req = Request::get(uri).body(Body::empty()).unwrap();
-    let resp = repose_api::app(store.clone()).oneshot(req).await.unwrap();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    serde_json::from_slice(&bytes).unwrap()
-}
-
 /// A store holding one finished two-sample sweep, and the real values of
 /// every kind of path parameter.
 async fn seeded() -> (Store, BTreeMap<&'static str, Vec<String>>, Value) {
-    let dir = std::env::temp_dir().join(format!("repose-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let _ = std::fs::remove_file(dir.join("fuzz.db"));
-    let url = format!("sqlite://{}", dir.join("fuzz.db").display());
-    let store = Store::open(&url).await.unwrap();
-    let spec = json!({"protocol": "fill_release", "base": {"box": {"width": 1.0, "height": 1.0}},
-        "axes": {"contact.mu": [0.1, 0.2]}, "samples": 1, "fidelity": "quick"});
-    let req = Request::post("/api/sweeps")
-        .header("content-type", "application/json")
-        .body(Body::from(spec.to_string()))
-        .unwrap();
-    let resp = repose_api::app(store.clone()).oneshot(req).await.unwrap();
-    assert_eq!(resp.status(), StatusCode::CREATED);
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    let id = serde_json::from_slice::<Value>(&bytes).unwrap()["id"]
-        .as_str()
-        .unwrap()
-        .to_string();
-    while let Some(job) = store
-        .claim("fuzz", std::time::Duration::from_secs(60))
-        .await
-        .unwrap()
-    {
-        let scene = repose_physics::Scene::from_toml(&job.scene, &[]).unwrap();
-        let report = repose_physics::run(&scene, &mut repose_physics::Quiet).unwrap();
-        let record = repose_worker::record(&report).unwrap();
-        store
-            .complete(&job.job_id, "fuzz", &job.sample_hash, &record)
-            .await
-            .unwrap();
-    }
-    let samples = get_json(&store, &format!("/api/sweeps/{id}/samples")).await;
+    let spec = common::small_sweep();
+    let (store, id) = common::store_with_finished_sweep("fuzz", &spec).await;
+    let samples = common::get_json(&store, &format!("/api/sweeps/{id}/samples")).await;
     let hashes = samples["samples"]
         .as_array()
         .unwrap()
         .iter()
         .filter_map(|s| s["sample_hash"].as_str().map(String::from))
         .collect();
-    let study = get_json(&store, "/api/studies/lh93").await;
+    let study = common::get_json(&store, "/api/studies/lh93").await;
     let keys = |field: &str| -> Vec<String> {
         study[field]
             .as_array()
