@@ -30,7 +30,7 @@ pub struct Checkpoint {
 }
 
 /// Version of the encoding; bump when a saved field changes.
-const FORMAT: u32 = 1;
+const FORMAT: u32 = 2;
 
 /// What must agree between the run that saved and the run that resumes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
