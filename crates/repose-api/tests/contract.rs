@@ -306,17 +306,6 @@ fn text(v: &Value) -> String {
     }
 }
 
-/// Percent-encodes everything but unreserved characters.
-fn encode(s: &str) -> String {
-    s.bytes()
-        .map(|b| match b {
-            b'a'..=b'z' | b'A'..=b'Z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' => {
-                (b as char).to_string()
-            }
-            _ => format!("%{b:02X}"),
-        })
-        .collect()
-}
 
 /// The document's schemas, compiled once each (by boon, a JSON Schema
 /// 2020-12 validator).
@@ -698,13 +687,13 @@ impl Run {
     fn uri(op: &Op, draft: &Draft) -> String {
         let mut uri = op.path.clone();
         for (k, v) in &draft.path {
-            uri = uri.replace(&format!("{{{k}}}"), &encode(v));
+            uri = uri.replace(&format!("{{{k}}}"), &common::encode(v));
         }
         if !draft.query.is_empty() {
             let pairs: Vec<String> = draft
                 .query
                 .iter()
-                .map(|(k, v)| format!("{}={}", encode(k), encode(v)))
+                .map(|(k, v)| format!("{}={}", common::encode(k), common::encode(v)))
                 .collect();
             uri = format!("{uri}?{}", pairs.join("&"));
         }

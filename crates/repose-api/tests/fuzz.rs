@@ -154,7 +154,7 @@ impl Gen {
         for part in route.split('/').skip(1) {
             out.push('/');
             match part.strip_prefix('{').and_then(|p| p.strip_suffix('}')) {
-                Some(name) => out.push_str(&encode(&self.segment(name))),
+                Some(name) => out.push_str(&common::encode(&self.segment(name))),
                 None => out.push_str(part),
             }
         }
@@ -169,7 +169,7 @@ impl Gen {
                     } else {
                         self.text()
                     };
-                    format!("{}={}", encode(&k), encode(&self.value_text()))
+                    format!("{}={}", common::encode(&k), common::encode(&self.value_text()))
                 })
                 .collect();
             out.push('?');
@@ -294,17 +294,6 @@ impl Gen {
     }
 }
 
-/// Percent-encodes everything but unreserved characters.
-fn encode(s: &str) -> String {
-    s.bytes()
-        .map(|b| match b {
-            b'a'..=b'z' | b'A'..=b'Z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' => {
-                (b as char).to_string()
-            }
-            _ => format!("%{b:02X}"),
-        })
-        .collect()
-}
 
 async fn send(
     store: &Store,
