@@ -306,7 +306,6 @@ fn text(v: &Value) -> String {
     }
 }
 
-
 /// The document's schemas, compiled once each (by boon, a JSON Schema
 /// 2020-12 validator).
 struct Schemas {

@@ -169,7 +169,11 @@ impl Gen {
                     } else {
                         self.text()
                     };
-                    format!("{}={}", common::encode(&k), common::encode(&self.value_text()))
+                    format!(
+                        "{}={}",
+                        common::encode(&k),
+                        common::encode(&self.value_text())
+                    )
                 })
                 .collect();
             out.push('?');
@@ -293,7 +297,6 @@ impl Gen {
         Some(text.into_bytes())
     }
 }
-
 
 async fn send(
     store: &Store,
