@@ -335,6 +335,9 @@ impl Material {
     /// A restitution raised by `cohesion_scaling = "restitution"` must stay
     /// below 1: softer than that, no collision dissipates enough.
     fn check_scaled_restitution(&self, scene: &Scene, c: &mut Checks) {
+        if self.cohesion_scaling != CohesionScaling::Restitution || !self.coheres() {
+            return;
+        }
         let Ok(grains) = scene.section::<Grains>() else {
             return;
         };
