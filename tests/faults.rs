@@ -169,7 +169,7 @@ async fn every_job_ends_done_once_through_kills_and_a_restart_on_postgres() {
     let Some(pg) = common::postgres().await else {
         return;
     };
-    let db = pg.url.clone();
+    let db = pg.url().to_string();
     let store = Store::open(&db).await.unwrap();
     let (id, f) = through_faults(&db, &store, true).await;
     assert_done_once(&store, &id).await;
@@ -178,5 +178,5 @@ async fn every_job_ends_done_once_through_kills_and_a_restart_on_postgres() {
         "{f:?}"
     );
     println!("PostgreSQL: {JOBS} jobs done once through {f:?}");
-    pg.drop_now(store).await;
+    repose_testkit::drop_postgres(pg, store).await;
 }

@@ -165,7 +165,7 @@ async fn a_killed_workers_heap_resumes_bit_for_bit_on_postgres() {
     let Some(pg) = common::postgres().await else {
         return;
     };
-    resumes_after_a_kill(&pg.url).await;
-    let store = Store::open(&pg.url).await.unwrap();
-    pg.drop_now(store).await;
+    resumes_after_a_kill(pg.url()).await;
+    let store = Store::open(pg.url()).await.unwrap();
+    repose_testkit::drop_postgres(pg, store).await;
 }

@@ -183,7 +183,7 @@ async fn assert_every_job_done_once(store: &Store, sweep: &str, jobs: &[JobSpec]
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn worker_processes_on_postgres_do_every_job_exactly_once() {
     let Some(db) = postgres().await else { return };
-    let url = db.url.clone();
+    let url = db.url().to_string();
     let store = Store::open(&url).await.unwrap();
     let spec = cheap_sweep(60);
     let (created, jobs) = create(&store, &spec, 3).await;
@@ -195,7 +195,7 @@ async fn worker_processes_on_postgres_do_every_job_exactly_once() {
         .await
         .unwrap();
     assert_eq!(owners, 60);
-    db.drop_now(store).await;
+    repose_testkit::drop_postgres(db, store).await;
 }
 
 /// `url` with its user replaced.
@@ -208,14 +208,14 @@ fn as_user(url: &str, user: &str) -> String {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_worker_with_the_least_privilege_role_finishes_a_sweep_on_postgres() {
     let Some(db) = postgres().await else { return };
-    let store = Store::open(&db.url).await.unwrap();
+    let store = Store::open(db.url()).await.unwrap();
     let (created, jobs) = create(&store, &cheap_sweep(12), 3).await;
     let roles = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/postgres/roles.sql"),
     )
     .unwrap();
     sqlx::raw_sql(&roles).execute(store.pool()).await.unwrap();
-    let url = as_user(&db.url, "repose_worker");
+    let url = as_user(db.url(), "repose_worker");
     for stderr in run_workers_until_idle(&url, 2) {
         assert!(
             !stderr.contains("could not") && !stderr.contains("failed"),
@@ -243,7 +243,7 @@ async fn a_worker_with_the_least_privilege_role_finishes_a_sweep_on_postgres() {
         );
     }
     worker.close().await;
-    db.drop_now(store).await;
+    repose_testkit::drop_postgres(db, store).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -281,43 +281,47 @@ async fn wait_running(store: &Store, sweep: &str) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_worker_keeps_its_result_through_a_database_outage_and_writes_it_after() {
     let Some(db) = postgres().await else { return };
-    let (store, sweep, jobs) = one_long_job(&db.url).await;
+    let (store, sweep, jobs) = one_long_job(db.url()).await;
     let w = worker(
-        &db.url,
+        db.url(),
         &["--exit-when-idle", "--lease", "30", "--heartbeat", "1"],
     );
     wait_running(&store, &sweep).await;
     // The database goes away: no new connections, every open one cut.
     let admin = |sql: String| {
-        let pool = db.admin.clone();
+        let pool = db.admin().clone();
         async move { sqlx::query(&sql).execute(&pool).await.unwrap() }
     };
     admin(format!(
         "ALTER DATABASE {} ALLOW_CONNECTIONS false",
-        db.name
+        db.name()
     ))
     .await;
     admin(format!(
         "SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = '{}'",
-        db.name
+        db.name()
     ))
     .await;
     // Long enough for the run to end and its first writes to fail.
     tokio::time::sleep(Duration::from_secs(6)).await;
-    admin(format!("ALTER DATABASE {} ALLOW_CONNECTIONS true", db.name)).await;
+    admin(format!(
+        "ALTER DATABASE {} ALLOW_CONNECTIONS true",
+        db.name()
+    ))
+    .await;
     let out = w.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("could not store the result"), "{stderr}");
     assert!(stderr.contains("1 results written"), "{stderr}");
     assert_every_job_done_once(&store, &sweep, &jobs).await;
-    db.drop_now(store).await;
+    repose_testkit::drop_postgres(db, store).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
     let Some(db) = postgres().await else { return };
-    let url = db.url.clone();
+    let url = db.url().to_string();
     let (store, sweep, jobs) = one_long_job(&url).await;
     let mut doomed = worker(&url, &["--lease", "1.5", "--heartbeat", "0.3"]);
     wait_running(&store, &sweep).await;
@@ -342,7 +346,7 @@ async fn a_killed_worker_loses_its_lease_and_another_finishes_the_job() {
         .await
         .unwrap();
     assert_eq!(attempts, 2, "the first attempt died with its worker");
-    db.drop_now(store).await;
+    repose_testkit::drop_postgres(db, store).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

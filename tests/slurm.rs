@@ -32,18 +32,10 @@ async fn a_sweep_completes_through_a_slurm_job_array() {
         eprintln!("skipping: no SLURM cluster (deploy/slurm/local-cluster.sh starts one)");
         return;
     }
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    let admin = sqlx::AnyPool::connect(&format!("{server}/postgres"))
+    let scratch_db = common::postgres()
         .await
         .expect("PostgreSQL for the SLURM test");
-    let name = format!("repose_slurm_{}", uuid::Uuid::new_v4().simple());
-    sqlx::query(&format!("CREATE DATABASE {name}"))
-        .execute(&admin)
-        .await
-        .unwrap();
-    let db = format!("{server}/{name}");
+    let db = scratch_db.url().to_string();
     let api = Server::start(&db, 0);
     let spec = json!({
         "protocol": "free_run",
@@ -101,9 +93,6 @@ async fn a_sweep_completes_through_a_slurm_job_array() {
         "{p:?}"
     );
     println!("SLURM: 2 array tasks wrote {written} results of sweep {id}");
-    store.pool().close().await;
     drop(api);
-    let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
-        .execute(&admin)
-        .await;
+    repose_testkit::drop_postgres(scratch_db, store).await;
 }

@@ -2,7 +2,7 @@
 //! `repose serve` on an ephemeral port.
 #![allow(dead_code)]
 
-use repose_store::{Created, Store};
+use repose_store::{Created, ScratchDatabase, Store};
 use repose_studies::{JobSpec, SweepSpec};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
@@ -11,14 +11,9 @@ use std::time::{Duration, Instant};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_repose");
 
+/// A path `name` in a new scratch folder.
 pub fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "repose-e2e-{}-{}",
-        std::process::id(),
-        uuid::Uuid::new_v4()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    repose_testkit::scratch_dir("repose-e2e").join(name)
 }
 
 /// `repose serve` on an ephemeral port.
@@ -164,45 +159,8 @@ pub fn signal(child: &Child, name: &str) {
     assert!(status.success(), "kill -s {name} failed");
 }
 
-/// A fresh PostgreSQL database for one test; dropped by [`PgDatabase::drop_now`].
-pub struct PgDatabase {
-    pub url: String,
-    pub admin: sqlx::AnyPool,
-    pub name: String,
-}
-
-impl PgDatabase {
-    pub async fn drop_now(self, store: Store) {
-        store.pool().close().await;
-        let _ = sqlx::query(&format!("DROP DATABASE {} WITH (FORCE)", self.name))
-            .execute(&self.admin)
-            .await;
-    }
-}
-
-/// A fresh database on the test PostgreSQL server (`REPOSE_TEST_POSTGRES`,
-/// by default 127.0.0.1:5432); none when there is no server, except in CI.
-pub async fn postgres() -> Option<PgDatabase> {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
-        Ok(admin) => {
-            let name = format!("repose_e2e_{}", uuid::Uuid::new_v4().simple());
-            sqlx::query(&format!("CREATE DATABASE {name}"))
-                .execute(&admin)
-                .await
-                .unwrap();
-            Some(PgDatabase {
-                url: format!("{server}/{name}"),
-                admin,
-                name,
-            })
-        }
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping: no PostgreSQL ({e})");
-            None
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
-    }
+/// A fresh database on the test PostgreSQL server; none when there is no
+/// server, except in CI.
+pub async fn postgres() -> Option<ScratchDatabase> {
+    repose_testkit::postgres("repose_e2e").await
 }

@@ -22,16 +22,7 @@ fn fixture(name: &str) -> Value {
 }
 
 fn scratch() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "repose-migration-{}-{}",
-        std::process::id(),
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap()
-            .as_nanos()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    repose_testkit::scratch_dir("repose-migration")
 }
 
 /// A migrator holding only the migrations 0.1 had.
@@ -291,31 +282,11 @@ async fn a_sqlite_store_of_version_0_1_is_served_as_before_after_the_upgrade() {
 
 #[tokio::test]
 async fn a_postgres_store_of_version_0_1_is_served_as_before_after_the_upgrade() {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    let admin = match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
-        Ok(a) => a,
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping: no PostgreSQL ({e})");
-            return;
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    let Some(db) = repose_testkit::postgres("repose_migration").await else {
+        return;
     };
-    let name = format!("repose_migration_{}", std::process::id());
-    let _ = sqlx::query(&format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"))
-        .execute(&admin)
-        .await;
-    sqlx::query(&format!("CREATE DATABASE {name}"))
-        .execute(&admin)
-        .await
-        .unwrap();
-    let url = format!("{server}/{name}");
-    load(&url, &scratch()).await;
-    let store = Store::open(&url).await.unwrap();
+    load(db.url(), &scratch()).await;
+    let store = db.open().await.unwrap();
     served_as_before(&store).await;
-    store.pool().close().await;
-    let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
-        .execute(&admin)
-        .await;
+    repose_testkit::drop_postgres(db, store).await;
 }

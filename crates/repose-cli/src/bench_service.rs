@@ -10,7 +10,7 @@
 
 use anyhow::Context;
 use repose_physics::{run, Quiet, Scene};
-use repose_store::{now_ms, Backend, NewJob, ResultRecord, Store};
+use repose_store::{now_ms, Backend, NewJob, ResultRecord, ScratchDatabase, Store};
 use repose_studies::SweepSpec;
 use repose_worker::{record, run_worker, WorkerConfig};
 use serde_json::json;
@@ -261,18 +261,14 @@ pub fn run_bench(args: BenchServiceArgs) -> anyhow::Result<ExitCode> {
         let _ = std::fs::remove_dir_all(&dir);
 
         if !args.no_postgres {
-            sqlx::any::install_default_drivers();
-            let server = args.postgres.trim_end_matches('/');
-            let admin = sqlx::AnyPool::connect(&format!("{server}/postgres"))
+            let db = ScratchDatabase::create(&args.postgres, "repose_bench")
                 .await
-                .with_context(|| format!("cannot reach PostgreSQL at {server} (use --no-postgres to skip)"))?;
-            let name = format!("repose_bench_{}", uuid::Uuid::new_v4().simple());
-            sqlx::query(&format!("CREATE DATABASE {name}")).execute(&admin).await?;
-            let pg = Store::open(&format!("{server}/{name}")).await?;
+                .with_context(|| format!("cannot reach PostgreSQL at {} (use --no-postgres to skip)", args.postgres))?;
+            let pg = db.open().await?;
             assert_eq!(pg.backend(), Backend::Postgres);
             let result = measure("PostgreSQL", &pg, &args).await;
             pg.pool().close().await;
-            sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)")).execute(&admin).await?;
+            db.drop_database().await?;
             result?;
         }
 

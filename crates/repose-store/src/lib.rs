@@ -31,6 +31,7 @@ mod checkpoints;
 pub mod export;
 mod query;
 mod queue;
+mod scratch;
 mod topup;
 
 use serde::{Deserialize, Serialize};
@@ -42,6 +43,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 pub use checkpoints::StoredCheckpoint;
 pub use query::{series, SeriesError, SeriesPoint};
 pub use queue::Retry;
+pub use scratch::ScratchDatabase;
 pub use topup::PointJobs;
 
 #[derive(Debug, thiserror::Error)]

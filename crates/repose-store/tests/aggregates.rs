@@ -139,40 +139,15 @@ async fn exercise(store: &Store) {
 
 #[tokio::test]
 async fn running_aggregates_equal_the_samples_on_sqlite() {
-    let dir = std::env::temp_dir().join(format!("repose-agg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let _ = std::fs::remove_file(dir.join("agg.db"));
-    let store = Store::open(&format!("sqlite://{}", dir.join("agg.db").display()))
-        .await
-        .unwrap();
-    exercise(&store).await;
+    exercise(&repose_testkit::sqlite("repose-agg").await).await;
 }
 
 #[tokio::test]
 async fn running_aggregates_equal_the_samples_on_postgres() {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    sqlx::any::install_default_drivers();
-    let admin = match sqlx::AnyPool::connect(&format!("{server}/postgres")).await {
-        Ok(a) => a,
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping: no PostgreSQL ({e})");
-            return;
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    let Some(db) = repose_testkit::postgres("repose_agg").await else {
+        return;
     };
-    let name = format!("repose_agg_{}", std::process::id());
-    let _ = sqlx::query(&format!("DROP DATABASE IF EXISTS {name}"))
-        .execute(&admin)
-        .await;
-    sqlx::query(&format!("CREATE DATABASE {name}"))
-        .execute(&admin)
-        .await
-        .unwrap();
-    let store = Store::open(&format!("{server}/{name}")).await.unwrap();
+    let store = db.open().await.unwrap();
     exercise(&store).await;
-    store.pool().close().await;
-    let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
-        .execute(&admin)
-        .await;
+    repose_testkit::drop_postgres(db, store).await;
 }

@@ -65,56 +65,17 @@ fn sweep(samples: u32, mus: &[f64]) -> (NewSweep, Vec<NewJob>) {
     )
 }
 
-async fn sqlite() -> Store {
-    let dir = std::env::temp_dir().join(format!(
-        "repose-store-{}-{}",
-        std::process::id(),
-        uuid::Uuid::new_v4()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    Store::open(&format!("sqlite://{}", dir.join("queue.db").display()))
-        .await
-        .unwrap()
-}
-
-/// A fresh PostgreSQL database (with its name, to drop it after the test),
-/// or None (outside CI) when no server answers.
-async fn postgres() -> Option<(Store, sqlx::AnyPool, String)> {
-    let server = std::env::var("REPOSE_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into());
-    let name = format!("repose_test_{}", uuid::Uuid::new_v4().simple());
-    sqlx::any::install_default_drivers();
-    let admin = sqlx::AnyPool::connect(&format!("{server}/postgres")).await;
-    let admin = match admin {
-        Ok(a) => a,
-        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipping the PostgreSQL half: {e}");
-            return None;
-        }
-        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
-    };
-    sqlx::query(&format!("CREATE DATABASE {name}"))
-        .execute(&admin)
-        .await
-        .unwrap();
-    let store = Store::open(&format!("{server}/{name}")).await.unwrap();
-    Some((store, admin, name))
-}
-
+/// Runs `test` on a fresh SQLite store, then on a fresh PostgreSQL one.
 async fn each_backend<F, Fut>(test: F)
 where
     F: Fn(Store) -> Fut,
     Fut: std::future::Future<Output = ()>,
 {
-    test(sqlite().await).await;
-    if let Some((store, admin, name)) = postgres().await {
-        let pool = store.pool().clone();
-        test(store).await;
-        pool.close().await;
-        // Best-effort clean-up; FORCE ends sessions the pool has not closed yet.
-        let _ = sqlx::query(&format!("DROP DATABASE {name} WITH (FORCE)"))
-            .execute(&admin)
-            .await;
+    test(repose_testkit::sqlite("repose-store").await).await;
+    if let Some(db) = repose_testkit::postgres("repose_test").await {
+        let store = db.open().await.unwrap();
+        test(store.clone()).await;
+        repose_testkit::drop_postgres(db, store).await;
     }
 }
 

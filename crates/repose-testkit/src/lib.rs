@@ -1,0 +1,58 @@
+//! Test support shared by the crates' and the workspace's tests: scratch
+//! stores on SQLite and PostgreSQL.
+//!
+//! PostgreSQL is the server named by `REPOSE_TEST_POSTGRES` (by default
+//! `postgres://postgres@127.0.0.1:5432`, trust auth). Outside CI a test
+//! without a server skips its PostgreSQL half with a line on stderr; in CI
+//! (`CI=true`) a missing server fails the test.
+
+use std::path::PathBuf;
+
+use repose_store::{ScratchDatabase, Store};
+
+/// The test PostgreSQL server, without a database name.
+pub fn postgres_server() -> String {
+    std::env::var("REPOSE_TEST_POSTGRES")
+        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432".into())
+}
+
+/// Whether this run is CI, where nothing a test needs may be skipped.
+pub fn in_ci() -> bool {
+    std::env::var("CI").as_deref() == Ok("true")
+}
+
+/// A fresh database `<prefix>_<uuid>` on the test server; `None` when no
+/// server answers, which fails the test in CI.
+pub async fn postgres(prefix: &str) -> Option<ScratchDatabase> {
+    match ScratchDatabase::create(&postgres_server(), prefix).await {
+        Ok(db) => Some(db),
+        Err(e) if !in_ci() => {
+            eprintln!("skipping the PostgreSQL part: no server ({e})");
+            None
+        }
+        Err(e) => panic!("PostgreSQL is required in CI: {e}"),
+    }
+}
+
+/// Closes the store's connections, then drops its scratch database.
+pub async fn drop_postgres(db: ScratchDatabase, store: Store) {
+    store.pool().close().await;
+    db.drop_database()
+        .await
+        .expect("the scratch database drops");
+}
+
+/// A new empty directory under the system's temporary folder.
+pub fn scratch_dir(prefix: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{prefix}-{}", uuid::Uuid::new_v4().simple()));
+    std::fs::create_dir_all(&dir).expect("the temporary folder is writable");
+    dir
+}
+
+/// A fresh SQLite store in a scratch directory.
+pub async fn sqlite(prefix: &str) -> Store {
+    let file = scratch_dir(prefix).join("store.db");
+    Store::open(&format!("sqlite://{}", file.display()))
+        .await
+        .expect("a fresh SQLite store opens")
+}
