@@ -604,6 +604,17 @@ function presetsText() {
     `${name} (${Object.entries(settings).map(([k, v]) => `${k} = ${v}`).join(", ")})`).join("; ");
 }
 
+// The notes of docs/ beside the papers' reports (which the studies name).
+const DOC_LINKS = [
+  ["speed-vs-accuracy", "Speed against accuracy of the 2D piles"],
+  ["tradeoff-heap", "Speed against accuracy of the 3D heap"],
+  ["model", "The 2D model"],
+  ["model-3d", "The 3D model and its open choices"],
+  ["scene", "Scene files"],
+  ["service", "The service"],
+  ["benchmarks", "Benchmarks"],
+];
+
 async function helpView() {
   await loadRegistry();
   const intro = h("div", { class: "panel" },
@@ -612,11 +623,10 @@ async function helpView() {
     h("p", {}, "Error bars show the sample standard deviation (the paper's error bar) or the standard error; points without a result (not settled, blown up) are counted apart."),
     h("p", {}, `Fidelity presets (fill_release): ${presetsText()}. What each costs and how far it moves the angles is measured below. The API is described at `,
       h("a", { href: "/api/openapi.json" }, "/api/openapi.json"), "."),
-    h("p", {}, "Reports: ",
-      h("a", { href: "#/doc/reproduction" }, "the reproduction of Lee & Herrmann's figures"), " · ",
-      h("a", { href: "#/doc/reproduction-ep21" }, "of Elekes & Parteli's"), " · ",
-      h("a", { href: "#/doc/speed-vs-accuracy" }, "speed against accuracy"), " · ",
-      h("a", { href: "#/doc/tradeoff-heap" }, "speed against accuracy of the 3D heap"), "."));
+    h("p", {}, "Reports and notes:"),
+    h("ul", { class: "reports" },
+      ...registry.studies.map(st => h("li", {}, h("a", { href: `#/doc/${st.report}` }, `The reproduction of ${st.citation}`))),
+      ...DOC_LINKS.map(([name, text]) => h("li", {}, h("a", { href: `#/doc/${name}` }, text)))));
   setView(h("h1", {}, "Help"), intro, h("p", { class: "muted" }, "Loading the speed/accuracy report…"));
   const doc = await fetchDoc("speed-vs-accuracy");
   setView(h("h1", {}, "Help"), intro,

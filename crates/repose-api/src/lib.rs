@@ -279,54 +279,18 @@ const WEB: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// Lists report files of `docs/` as (name, contents).
-macro_rules! docs {
-    ($($name:literal),* $(,)?) => {
-        &[$(($name, include_str!(concat!("../../../docs/", $name)))),*]
-    };
-}
+/// The committed `docs/` folder — the reports with their figures and data,
+/// the notes on the model, the scenes and the service — compiled in.
+#[derive(rust_embed::Embed)]
+#[folder = "../../docs"]
+struct Docs;
 
-/// The generated reports, as committed in `docs/`.
-const DOCS: &[(&str, &str)] = docs![
-    "speed-vs-accuracy.md",
-    "speed-vs-accuracy-repose.svg",
-    "speed-vs-accuracy-tilt.svg",
-    "speed-vs-accuracy.csv",
-    "tradeoff-heap.md",
-    "tradeoff-heap.svg",
-    "tradeoff-heap.csv",
-    "reproduction.md",
-    "reproduction.json",
-    "reproduction-fig2a.svg",
-    "reproduction-fig2b.svg",
-    "reproduction-fig3.svg",
-    "reproduction-fig4.svg",
-    "reproduction-fig5.svg",
-    "reproduction-fig7a.svg",
-    "reproduction-fig7b.svg",
-    "reproduction-k_n.svg",
-    "reproduction-gamma_n.svg",
-    "reproduction-quick.md",
-    "reproduction-quick.json",
-    "reproduction-quick-fig2a.svg",
-    "reproduction-quick-fig2b.svg",
-    "reproduction-quick-fig3.svg",
-    "reproduction-quick-fig4.svg",
-    "reproduction-quick-fig5.svg",
-    "reproduction-quick-fig7a.svg",
-    "reproduction-quick-fig7b.svg",
-    "reproduction-quick-k_n.svg",
-    "reproduction-quick-gamma_n.svg",
-    "reproduction-ep21.md",
-    "reproduction-ep21.json",
-    "reproduction-ep21-fig2.svg",
-    "reproduction-ep21-fig3a.svg",
-    "reproduction-ep21-fig3b.svg",
-    "reproduction-ep21-fig3c.svg",
-    "reproduction-ep21-fig4.svg",
-    "reproduction-ep21-fig5.svg",
-    "reproduction-ep21-regime.svg",
-];
+/// The names of the files of `docs/` the server serves, sorted.
+pub(crate) fn doc_names() -> Vec<String> {
+    let mut names: Vec<String> = Docs::iter().map(|n| n.into_owned()).collect();
+    names.sort_unstable();
+    names
+}
 
 fn content_type(file: &str) -> &'static str {
     match file.rsplit('.').next() {
@@ -338,24 +302,25 @@ fn content_type(file: &str) -> &'static str {
     }
 }
 
-/// A report file: from the docs folder given to the server if it has the
-/// file, else the copy compiled in. Only the known report names are served,
+/// A file of `docs/`: from the docs folder given to the server if it has
+/// the file, else the copy compiled in. Only names compiled in are served,
 /// so no path outside the folder can be reached.
 #[utoipa::path(get, path = "/docs/{file}", tag = "reports",
-    params(("file" = String, Path, description = "a report file: reproduction.md, speed-vs-accuracy.md and their SVG, CSV and JSON files")),
+    params(("file" = String, Path, description = "a file of docs/: the reports (reproduction.md, reproduction-ep21.md, speed-vs-accuracy.md, tradeoff-heap.md) with their SVG, CSV and JSON files, and the notes (model.md, model-3d.md, scene.md, service.md, benchmarks.md)")),
     responses((status = 200, description = "the file (Markdown, SVG, CSV or JSON)", content(
         (String = "text/markdown"), (String = "image/svg+xml"), (String = "text/csv"), (Object = "application/json"))),
         (status = 404, body = ErrorBody)))]
 async fn doc_file(State(s): State<AppState>, Path(file): Path<String>) -> Response {
-    let Some((_, embedded)) = DOCS.iter().find(|(name, _)| *name == file) else {
+    let Some(embedded) = Docs::get(&file) else {
         return ApiError::new(StatusCode::NOT_FOUND, format!("no report file `{file}`"))
             .into_response();
     };
+    let embedded = String::from_utf8_lossy(&embedded.data).into_owned();
     let body = match &s.docs {
         Some(dir) => tokio::fs::read_to_string(dir.join(&file))
             .await
-            .unwrap_or_else(|_| embedded.to_string()),
-        None => embedded.to_string(),
+            .unwrap_or(embedded),
+        None => embedded,
     };
     (
         [

@@ -285,7 +285,7 @@ async fn a_papers_sweep_is_queued_by_its_key_and_reused_when_queued_again() {
 }
 
 #[tokio::test]
-async fn reports_are_served_by_name_and_nothing_else_is() {
+async fn the_files_of_docs_are_served_by_name_and_nothing_else_is() {
     let s = store().await;
     let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;
     assert_eq!(status, StatusCode::OK);
@@ -296,14 +296,46 @@ async fn reports_are_served_by_name_and_nothing_else_is() {
     let (status, _, text) = call(&s, "GET", "/docs/reproduction-fig3.svg", None).await;
     assert_eq!(status, StatusCode::OK);
     assert!(text.starts_with("<svg"));
+    let (status, _, text) = call(&s, "GET", "/docs/model-3d.md", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(text.starts_with("# The 3D model"), "{text}");
     for bad in [
-        "/docs/model.md",
         "/docs/..%2FCargo.toml",
+        "/docs/..%2F..%2FCargo.toml",
         "/docs/nothing.svg",
     ] {
         let (status, json, text) = call(&s, "GET", bad, None).await;
         assert_eq!(status, StatusCode::NOT_FOUND, "{bad}: {text}");
         assert!(json["error"].is_string(), "{bad}: {text}");
+    }
+}
+
+/// The relative targets of a Markdown text's links and images.
+fn link_targets(markdown: &str) -> Vec<&str> {
+    markdown
+        .split("](")
+        .skip(1)
+        .filter_map(|rest| rest.split([')', '#']).next())
+        .filter(|t| !t.is_empty() && !t.contains(':') && !t.starts_with('/'))
+        .collect()
+}
+
+#[tokio::test]
+async fn every_papers_report_is_served_with_every_file_it_links_in_docs() {
+    let s = store().await;
+    for paper in repose_studies::papers::PAPERS {
+        let path = format!("/docs/{}.md", paper.report);
+        let (status, _, report) = call(&s, "GET", &path, None).await;
+        assert_eq!(status, StatusCode::OK, "{path}");
+        let targets = link_targets(&report);
+        assert!(
+            targets.iter().any(|t| t.ends_with(".svg")),
+            "{path} shows no figure"
+        );
+        for target in targets.into_iter().filter(|t| !t.starts_with("..")) {
+            let (status, _, _) = call(&s, "GET", &format!("/docs/{target}"), None).await;
+            assert_eq!(status, StatusCode::OK, "{path} links {target}");
+        }
     }
 }
 

@@ -28,7 +28,7 @@ pub struct ReproduceArgs {
     /// Embedded workers (default: one per core).
     #[arg(long)]
     workers: Option<usize>,
-    /// The paper to reproduce (its study key), or `both`.
+    /// The paper to reproduce (its study key), or `all` for every paper.
     #[arg(long, default_value = "lh93")]
     paper: String,
     /// Fidelity preset of every sweep.
@@ -38,8 +38,8 @@ pub struct ReproduceArgs {
     #[arg(long)]
     samples: Option<u32>,
     /// The Markdown report of one paper; figures (SVG) and the numbers
-    /// (JSON) go beside it. By default `docs/reproduction.md` (lh93) or
-    /// `docs/reproduction-ep21.md` (ep21) in --out-dir.
+    /// (JSON) go beside it. By default the paper's own report file in
+    /// --out-dir (`reproduction.md` for lh93, `reproduction-ep21.md` for ep21).
     #[arg(long)]
     out: Option<PathBuf>,
     /// The folder of the reports when --out names none.
@@ -65,7 +65,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
     if let Some(json) = &args.rewrite {
         return rewrite(json);
     }
-    let chosen: Vec<&'static Paper> = if args.paper == "both" {
+    let chosen: Vec<&'static Paper> = if args.paper == "all" {
         papers::PAPERS.to_vec()
     } else {
         match papers::find(&args.paper) {
@@ -73,7 +73,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
             None => {
                 let keys: Vec<&str> = papers::PAPERS.iter().map(|p| p.key).collect();
                 bail!(
-                    "--paper: no study `{}` (studies are {}, or both)",
+                    "--paper: no study `{}` (studies are {}, or all)",
                     args.paper,
                     keys.join(", ")
                 );
@@ -81,7 +81,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
         }
     };
     if chosen.len() > 1 && args.out.is_some() {
-        bail!("--out names one report: with --paper both, give --out-dir");
+        bail!("--out names one report: with --paper all, give --out-dir");
     }
     runtime()?.block_on(async {
         let Some(url) = args.server.clone() else {

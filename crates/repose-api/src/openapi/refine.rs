@@ -40,7 +40,7 @@ struct Registry {
     study_sweeps: Vec<String>,
     /// Figure keys of every paper, each once.
     figures: Vec<String>,
-    docs: Vec<&'static str>,
+    docs: Vec<String>,
     web: Vec<&'static str>,
 }
 
@@ -62,7 +62,7 @@ impl Registry {
             papers: PAPERS.iter().map(|p| p.key).collect(),
             study_sweeps: Vec::new(),
             figures: Vec::new(),
-            docs: crate::DOCS.iter().map(|(name, _)| *name).collect(),
+            docs: crate::doc_names(),
             web: crate::WEB.iter().map(|(name, _, _)| *name).collect(),
         };
         for p in protocols::all() {
