@@ -11,13 +11,14 @@
 //! modulus, so that it maps each softened heap onto the reference's
 //! collisions.
 
+use super::tally::{costed, failure_lines, shift_chart, stats_over, Ran, Tally};
 use super::{
-    cores, gather, preset_cases, stats_cell, write_csv, Case, Config, Gathered, Group, Shift,
+    cores, gather, preset_cases, stats_cell, write_files, Case, Config, Gathered, Group, Shift,
     TradeoffError,
 };
-use crate::chart::{Chart, Series, Style};
+use crate::chart::Chart;
 use repose_physics::measure::Stats;
-use repose_physics::{Quiet, Scene, ENGINE};
+use repose_physics::{Scene, ENGINE};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;
@@ -169,34 +170,26 @@ struct Sample {
     reason: String,
 }
 
+costed!(Sample);
+
 fn run_one(case: &Case, scene: &Scene) -> Sample {
     let modulus = scene.sections["material"]["youngs_modulus"]
         .as_f64()
         .unwrap_or(f64::NAN);
-    let (status, reason, metrics, wall, steps) = match repose_physics::run(scene, &mut Quiet) {
-        Ok(r) => (
-            r.outcome.status().to_string(),
-            r.outcome.reason().unwrap_or_default(),
-            r.metrics.clone(),
-            r.wall_time,
-            r.particle_steps,
-        ),
-        Err(e) => ("invalid".into(), e.to_string(), Default::default(), 0.0, 0),
-    };
-    let m = |name: &str| metrics.get(name).copied();
+    let ran = Ran::of(scene);
     Sample {
         setting: case.name.clone(),
         group: case.group,
         seed: scene.seed,
-        status,
-        theta_r: m("theta_r"),
-        theta_r_footprint: m("theta_r_footprint"),
-        heap_grains: m("heap_grains"),
-        surface_roughness: m("surface_roughness"),
+        theta_r: ran.metric("theta_r"),
+        theta_r_footprint: ran.metric("theta_r_footprint"),
+        heap_grains: ran.metric("heap_grains"),
+        surface_roughness: ran.metric("surface_roughness"),
         youngs_modulus: modulus,
-        wall_time_s: wall,
-        particle_steps: steps,
-        reason,
+        wall_time_s: ran.wall_time,
+        particle_steps: ran.particle_steps,
+        status: ran.status,
+        reason: ran.reason,
     }
 }
 
@@ -207,32 +200,17 @@ struct Summary {
     grains: Option<Stats>,
     roughness: Option<Stats>,
     modulus: f64,
-    wall_time: f64,
-    particle_steps: f64,
-    runs: usize,
-    failed: Vec<String>,
+    cost: Tally,
 }
 
 fn summarise(samples: &[&Sample]) -> Summary {
-    let of = |f: &dyn Fn(&Sample) -> Option<f64>| {
-        let v: Vec<f64> = samples.iter().filter_map(|s| f(s)).collect();
-        Stats::of(&v)
-    };
-    let n = samples.len().max(1) as f64;
     Summary {
-        theta: of(&|s| s.theta_r),
-        footprint: of(&|s| s.theta_r_footprint),
-        grains: of(&|s| s.heap_grains),
-        roughness: of(&|s| s.surface_roughness),
+        theta: stats_over(samples, |s| s.theta_r),
+        footprint: stats_over(samples, |s| s.theta_r_footprint),
+        grains: stats_over(samples, |s| s.heap_grains),
+        roughness: stats_over(samples, |s| s.surface_roughness),
         modulus: samples.first().map_or(f64::NAN, |s| s.youngs_modulus),
-        wall_time: samples.iter().map(|s| s.wall_time_s).sum::<f64>() / n,
-        particle_steps: samples.iter().map(|s| s.particle_steps as f64).sum::<f64>() / n,
-        runs: samples.len(),
-        failed: samples
-            .iter()
-            .filter(|s| s.status != "completed")
-            .map(|s| format!("seed {}: {} ({})", s.seed, s.status, s.reason))
-            .collect(),
+        cost: Tally::of(samples),
     }
 }
 
@@ -241,23 +219,10 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<HeapReport,
     let all = cases();
     let Gathered {
         samples,
+        summaries,
         fresh,
         elapsed,
-    } = gather(
-        config,
-        &all,
-        BASE,
-        tick,
-        |s: &Sample| (s.setting.as_str(), s.seed),
-        run_one,
-    )?;
-    let summaries = all
-        .iter()
-        .map(|c| {
-            let mine: Vec<&Sample> = samples.iter().filter(|s| s.setting == c.name).collect();
-            (!mine.is_empty()).then(|| summarise(&mine))
-        })
-        .collect();
+    } = gather(config, &all, BASE, tick, run_one, summarise)?;
     Ok(HeapReport {
         cases: all,
         summaries,
@@ -283,7 +248,7 @@ impl HeapReport {
         self.summaries.first().and_then(Option::as_ref)
     }
 
-    fn rows(&self) -> impl Iterator<Item = (&Case, &Summary)> {
+    fn rows(&self) -> impl Iterator<Item = (&Case, &Summary)> + Clone {
         self.cases
             .iter()
             .zip(&self.summaries)
@@ -310,46 +275,34 @@ impl HeapReport {
             };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.2e} | {:.2}× ({:.1} s) | {:.2}× | {} | {} | {} | {} | {} | {}/{} | {verdict} |",
+                "| {} | {} | {:.2e} | {} | {} | {} | {} | {} | {} | {} | {verdict} |",
                 c.name,
                 c.what,
                 m.modulus,
-                m.wall_time / r.wall_time,
-                m.wall_time,
-                m.particle_steps / r.particle_steps,
+                m.cost.cost_cells(&r.cost, 1),
                 stats_cell(m.theta),
                 Shift::cell(shift),
                 stats_cell(m.footprint),
                 stats_cell(m.grains),
                 stats_cell(m.roughness),
-                m.failed.len(),
-                m.runs,
+                m.cost.failed_cell(),
             );
         }
         s
     }
 
     fn chart(&self) -> Chart {
-        let mut chart = Chart::new(
+        let r = self.reference();
+        shift_chart(
             "Shift of θ_r from the reference heap",
-            "wall time relative to the reference",
             "Δθ_r (°)",
-        );
-        chart.log_x = true;
-        chart.y_rule = Some(0.0);
-        let Some(r) = self.reference() else {
-            return chart;
-        };
-        for (group, name) in [(Group::Presets, "presets"), (Group::Knobs, "knobs")] {
-            let mut series = Series::new(name, Style::Points);
-            for (c, m) in self.rows().filter(|(c, _)| c.group == group) {
-                if let Some(sh) = Shift::between(m.theta, r.theta) {
-                    series = series.labelled(m.wall_time / r.wall_time, sh.delta, sh.se, &c.name);
-                }
-            }
-            chart.series.push(series);
-        }
-        chart
+            self.rows(),
+            |m: &Summary| {
+                let r = r?;
+                let shift = Shift::between(m.theta, r.theta)?;
+                Some((m.cost.wall_time / r.cost.wall_time, shift))
+            },
+        )
     }
 
     fn markdown(&self, stem: &str) -> String {
@@ -472,10 +425,7 @@ impl HeapReport {
     }
 
     fn failures(&self) -> String {
-        let lines: Vec<String> = self
-            .rows()
-            .flat_map(|(c, m)| m.failed.iter().map(move |f| format!("- `{}` {f}", c.name)))
-            .collect();
+        let lines = failure_lines(self.rows().map(|(c, m)| (c, &m.cost)));
         if lines.is_empty() {
             return "Every run completed.\n\n".into();
         }
@@ -487,23 +437,13 @@ impl HeapReport {
 
     /// Writes the Markdown report, its chart and the per-sample CSV beside it.
     pub fn write(&self) -> Result<(), TradeoffError> {
-        let out = &self.config.out;
-        let io = |path: &Path| {
-            let path = path.display().to_string();
-            move |error| TradeoffError::Write { path, error }
-        };
-        if let Some(d) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(d).map_err(io(d))?;
-        }
-        let stem = out
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("tradeoff-heap")
-            .to_string();
-        let svg = out.with_file_name(format!("{stem}.svg"));
-        std::fs::write(out, self.markdown(&stem)).map_err(io(out))?;
-        std::fs::write(&svg, self.chart().svg()).map_err(io(&svg))?;
-        write_csv(&out.with_extension("csv"), &self.samples)
+        write_files(
+            &self.config.out,
+            "tradeoff-heap",
+            |stem| self.markdown(stem),
+            vec![(".svg", self.chart())],
+            &self.samples,
+        )
     }
 
     /// Every setting's cost and shift, for the terminal.
@@ -517,7 +457,7 @@ impl HeapReport {
                 s,
                 "{:<22} {:>7.2}× {:>24} {:>15}",
                 c.name,
-                m.wall_time / r.wall_time,
+                m.cost.wall_time / r.cost.wall_time,
                 stats_cell(m.theta),
                 Shift::cell(Shift::between(m.theta, r.theta))
             );

@@ -10,14 +10,16 @@
 //! the 3D poured heap is in [`heap`].
 
 pub mod heap;
+mod tally;
 
-use crate::chart::{Chart, Series, Style};
+use crate::chart::Chart;
 use rayon::prelude::*;
 use repose_physics::measure::Stats;
-use repose_physics::{protocols, Preset, Quiet, Scene, SceneError, ENGINE};
+use repose_physics::{protocols, Preset, Scene, SceneError, ENGINE};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
+use tally::{costed, failure_lines, shift_chart, stats_over, Costed, Ran, Tally};
 
 /// What to run and where to write it.
 #[derive(Debug, Clone)]
@@ -273,30 +275,22 @@ struct Sample {
     reason: String,
 }
 
+costed!(Sample);
+
 fn run_one(case: &Case, scene: &Scene) -> Sample {
-    let (status, reason, metric, wall_time, steps) = match repose_physics::run(scene, &mut Quiet) {
-        Ok(r) => (
-            r.outcome.status().to_string(),
-            r.outcome.reason().unwrap_or_default(),
-            r.metrics.clone(),
-            r.wall_time,
-            r.particle_steps,
-        ),
-        Err(e) => ("invalid".into(), e.to_string(), Default::default(), 0.0, 0),
-    };
-    let m = |name: &str| metric.get(name).copied();
+    let ran = Ran::of(scene);
     Sample {
         setting: case.name.clone(),
         group: case.group,
         seed: scene.seed,
-        status,
-        reason,
-        theta_r_method1: m("theta_r_endpoints"),
-        theta_r_method2: m("theta_r_line"),
-        theta_r_method3: m("theta_r"),
-        theta_t: m("theta_t"),
-        wall_time_s: wall_time,
-        particle_steps: steps,
+        theta_r_method1: ran.metric("theta_r_endpoints"),
+        theta_r_method2: ran.metric("theta_r_line"),
+        theta_r_method3: ran.metric("theta_r"),
+        theta_t: ran.metric("theta_t"),
+        wall_time_s: ran.wall_time,
+        particle_steps: ran.particle_steps,
+        status: ran.status,
+        reason: ran.reason,
     }
 }
 
@@ -305,34 +299,19 @@ struct Summary {
     repose: Option<Stats>,
     methods: [Option<Stats>; 3],
     tilt: Option<Stats>,
-    wall_time: f64,
-    particle_steps: f64,
-    runs: usize,
-    failed: Vec<String>,
+    cost: Tally,
 }
 
 fn summarise(samples: &[&Sample]) -> Summary {
-    let of = |f: &dyn Fn(&Sample) -> Option<f64>| {
-        let v: Vec<f64> = samples.iter().filter_map(|s| f(s)).collect();
-        Stats::of(&v)
-    };
-    let n = samples.len().max(1) as f64;
     Summary {
-        repose: of(&|s| s.theta_r_method3),
+        repose: stats_over(samples, |s| s.theta_r_method3),
         methods: [
-            of(&|s| s.theta_r_method1),
-            of(&|s| s.theta_r_method2),
-            of(&|s| s.theta_r_method3),
+            stats_over(samples, |s| s.theta_r_method1),
+            stats_over(samples, |s| s.theta_r_method2),
+            stats_over(samples, |s| s.theta_r_method3),
         ],
-        tilt: of(&|s| s.theta_t),
-        wall_time: samples.iter().map(|s| s.wall_time_s).sum::<f64>() / n,
-        particle_steps: samples.iter().map(|s| s.particle_steps as f64).sum::<f64>() / n,
-        runs: samples.len(),
-        failed: samples
-            .iter()
-            .filter(|s| s.status != "completed")
-            .map(|s| format!("seed {}: {} ({})", s.seed, s.status, s.reason))
-            .collect(),
+        tilt: stats_over(samples, |s| s.theta_t),
+        cost: Tally::of(samples),
     }
 }
 
@@ -398,56 +377,68 @@ pub(crate) fn plan(
     Ok(jobs)
 }
 
-/// The samples kept from an earlier run's CSV for settings and seeds still
-/// planned (`key` names a sample's setting and seed).
-/// The samples of a study and what running them took.
-pub(crate) struct Gathered<S> {
+/// The samples of a study, each setting's summary, and what running them
+/// took.
+pub(crate) struct Gathered<S, M> {
     /// Every sample, in setting then seed order.
     pub samples: Vec<S>,
-    /// How many of them ran now (the rest were kept from the CSV).
+    /// Each setting's summary, in the settings' order (`None` for a
+    /// setting that did not run).
+    pub summaries: Vec<Option<M>>,
+    /// How many samples ran now (the rest were kept from the CSV).
     pub fresh: usize,
     pub elapsed: f64,
 }
 
 /// Plans every setting over the seeds, keeps the samples of the CSV beside
-/// `--out` with `--resume`, runs the rest, and orders them all.
-pub(crate) fn gather<S: serde::de::DeserializeOwned + Send>(
+/// `--out` with `--resume`, runs the rest with `one`, orders them all and
+/// summarises each setting's with `summarise`.
+pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
     config: &Config,
     all: &[Case],
     base: &str,
     tick: &(dyn Fn(usize) + Sync),
-    key: impl Fn(&S) -> (&str, u64) + Copy,
     one: impl Fn(&Case, &Scene) -> S + Sync,
-) -> Result<Gathered<S>, TradeoffError> {
+    summarise: impl Fn(&[&S]) -> M,
+) -> Result<Gathered<S, M>, TradeoffError> {
     let mut jobs = plan(config, all, base)?;
     let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
     let kept: Vec<S> = if config.resume {
-        kept(&config.out.with_extension("csv"), &names, &jobs, key)
+        kept(&config.out.with_extension("csv"), &names, &jobs)
     } else {
         Vec::new()
     };
     jobs.retain(|(k, sc)| {
         !kept
             .iter()
-            .any(|s| key(s) == (all[*k].name.as_str(), sc.seed))
+            .any(|s| (s.setting(), s.seed()) == (all[*k].name.as_str(), sc.seed))
     });
     let (mut samples, elapsed) = run_jobs(config, &mut jobs, tick, |k, scene| one(&all[k], scene))?;
     let fresh = samples.len();
     samples.extend(kept);
-    let index = |s: &S| all.iter().position(|c| c.name == key(s).0).unwrap_or(0);
-    samples.sort_by_key(|s| (index(s), key(s).1));
+    let index = |s: &S| all.iter().position(|c| c.name == s.setting()).unwrap_or(0);
+    samples.sort_by_key(|s| (index(s), s.seed()));
+    let summaries = all
+        .iter()
+        .map(|c| {
+            let mine: Vec<&S> = samples.iter().filter(|s| s.setting() == c.name).collect();
+            (!mine.is_empty()).then(|| summarise(&mine))
+        })
+        .collect();
     Ok(Gathered {
         samples,
+        summaries,
         fresh,
         elapsed,
     })
 }
 
-pub(crate) fn kept<S: serde::de::DeserializeOwned>(
+/// The samples of an earlier run's CSV for settings and seeds still
+/// planned.
+pub(crate) fn kept<S: Costed + serde::de::DeserializeOwned>(
     csv: &Path,
     names: &[String],
     jobs: &[(usize, Scene)],
-    key: impl Fn(&S) -> (&str, u64),
 ) -> Vec<S> {
     let Ok(mut reader) = csv::Reader::from_path(csv) else {
         return Vec::new();
@@ -456,7 +447,7 @@ pub(crate) fn kept<S: serde::de::DeserializeOwned>(
         .deserialize::<S>()
         .filter_map(Result::ok)
         .filter(|s| {
-            let (setting, seed) = key(s);
+            let (setting, seed) = (s.setting(), s.seed());
             jobs.iter()
                 .any(|(k, sc)| names[*k] == setting && sc.seed == seed)
         })
@@ -492,6 +483,37 @@ pub(crate) fn run_jobs<S: Send>(
     Ok((samples, clock.elapsed().as_secs_f64()))
 }
 
+/// Writes a study's Markdown report at `out` (made by `markdown` from the
+/// file stem, `default_stem` if `out` has none), its charts beside it (the
+/// stem and each suffix) and its per-sample CSV.
+pub(crate) fn write_files<S: Serialize>(
+    out: &Path,
+    default_stem: &str,
+    markdown: impl FnOnce(&str) -> String,
+    charts: Vec<(&str, Chart)>,
+    samples: &[S],
+) -> Result<(), TradeoffError> {
+    let io = |path: &Path| {
+        let path = path.display().to_string();
+        move |error| TradeoffError::Write { path, error }
+    };
+    if let Some(d) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(io(d))?;
+    }
+    let stem = out
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or(default_stem)
+        .to_string();
+    let beside = |suffix: &str| out.with_file_name(format!("{stem}{suffix}"));
+    let write = |path: PathBuf, text: String| std::fs::write(&path, text).map_err(io(&path));
+    write(out.to_path_buf(), markdown(&stem))?;
+    for (suffix, chart) in charts {
+        write(beside(suffix), chart.svg())?;
+    }
+    write_csv(&beside(".csv"), samples)
+}
+
 /// Writes the samples as CSV.
 pub(crate) fn write_csv<S: Serialize>(path: &Path, samples: &[S]) -> Result<(), TradeoffError> {
     let err = |error: std::io::Error| TradeoffError::Write {
@@ -512,25 +534,10 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, Tra
     let all = cases();
     let Gathered {
         samples,
+        summaries,
         fresh,
         elapsed,
-    } = gather(
-        config,
-        &all,
-        BASE,
-        tick,
-        |s: &Sample| (s.setting.as_str(), s.seed),
-        run_one,
-    )?;
-    let summaries = (0..all.len())
-        .map(|k| {
-            let mine: Vec<&Sample> = samples
-                .iter()
-                .filter(|s| s.setting == all[k].name)
-                .collect();
-            (!mine.is_empty()).then(|| summarise(&mine))
-        })
-        .collect();
+    } = gather(config, &all, BASE, tick, run_one, summarise)?;
     let base = Scene::from_toml(BASE, &config.set)
         .map_err(|error| TradeoffError::Scene {
             setting: "base".into(),
@@ -570,10 +577,7 @@ static NOTHING: Summary = Summary {
     repose: None,
     methods: [None, None, None],
     tilt: None,
-    wall_time: f64::NAN,
-    particle_steps: f64::NAN,
-    runs: 0,
-    failed: Vec::new(),
+    cost: Tally::NONE,
 };
 
 impl Report {
@@ -614,18 +618,15 @@ impl Report {
             };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.2}× ({:.2} s) | {:.2}× | {} | {} | {} | {} | {}/{} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 c.name,
                 c.what,
-                m.wall_time / r.wall_time,
-                m.wall_time,
-                m.particle_steps / r.particle_steps,
+                m.cost.cost_cells(&r.cost, 2),
                 stats_cell(m.repose),
                 Shift::cell(dr),
                 stats_cell(m.tilt),
                 Shift::cell(dt),
-                m.failed.len(),
-                m.runs,
+                m.cost.failed_cell(),
                 verdict
             );
         }
@@ -650,26 +651,22 @@ impl Report {
         } else {
             ("Shift of θ_R from the reference", "Δθ_R (°)")
         };
-        let mut chart = Chart::new(title, "wall time relative to the reference", y);
-        chart.log_x = true;
-        chart.y_rule = Some(0.0);
-        for (group, name) in [(Group::Presets, "presets"), (Group::Knobs, "knobs")] {
-            let mut series = Series::new(name, Style::Points);
-            for (c, m) in self.rows(group) {
-                let shift = if tilt {
-                    Shift::between(m.tilt, r.tilt)
-                } else {
-                    Shift::between(m.repose, r.repose)
-                };
-                // Settings that leave the angle bit-identical (the skin for
-                // both angles, the tilt knobs for θ_R) have nothing to show.
-                if let Some(sh) = shift.filter(|sh| sh.delta != 0.0) {
-                    series = series.labelled(m.wall_time / r.wall_time, sh.delta, sh.se, &c.name);
-                }
-            }
-            chart.series.push(series);
-        }
-        chart
+        let rows = self
+            .cases
+            .iter()
+            .zip(&self.summaries)
+            .filter_map(|(c, s)| Some((c, s.as_ref()?)));
+        shift_chart(title, y, rows, |m: &Summary| {
+            let shift = if tilt {
+                Shift::between(m.tilt, r.tilt)
+            } else {
+                Shift::between(m.repose, r.repose)
+            };
+            // Settings that leave the angle bit-identical (the skin for
+            // both angles, the tilt knobs for θ_R) have nothing to show.
+            let sh = shift.filter(|sh| sh.delta != 0.0)?;
+            Some((m.cost.wall_time / r.cost.wall_time, sh))
+        })
     }
 
     fn markdown(&self, stem: &str) -> String {
@@ -739,8 +736,8 @@ impl Report {
             self.cases[0].what,
             stats_cell(r.repose),
             stats_cell(r.tilt),
-            r.wall_time,
-            r.particle_steps
+            r.cost.wall_time,
+            r.cost.particle_steps
         );
         s
     }
@@ -855,7 +852,7 @@ impl Report {
                     "| {key} = {value:e} | {mean:.2} ± {sd:.2} | {} | {} | {paper_shift:+.2} | {our_shift} | {:.2} s |",
                     stats_cell(o.repose),
                     diff.unwrap_or_else(|| "—".into()),
-                    o.wall_time
+                    o.cost.wall_time
                 );
             }
             let _ = writeln!(
@@ -906,13 +903,12 @@ impl Report {
 
     fn failures(&self) -> String {
         let mut s = String::new();
-        let failures: Vec<String> = self
-            .cases
-            .iter()
-            .zip(&self.summaries)
-            .filter_map(|(c, m)| m.as_ref().map(|m| (c, m)))
-            .flat_map(|(c, m)| m.failed.iter().map(move |f| format!("- `{}` {f}", c.name)))
-            .collect();
+        let failures = failure_lines(
+            self.cases
+                .iter()
+                .zip(&self.summaries)
+                .filter_map(|(c, m)| Some((c, &m.as_ref()?.cost))),
+        );
         let _ = writeln!(s, "## Runs without a result\n");
         if failures.is_empty() {
             let _ = writeln!(s, "Every run completed.\n");
@@ -943,8 +939,8 @@ impl Report {
                 s,
                 "{:<16} {:>7.2} {:>8.2} {:>22} {:>15} {:>22} {:>15}",
                 c.name,
-                m.wall_time / r.wall_time,
-                m.particle_steps / r.particle_steps,
+                m.cost.wall_time / r.cost.wall_time,
+                m.cost.particle_steps / r.cost.particle_steps,
                 stats_cell(m.repose),
                 Shift::cell(Shift::between(m.repose, r.repose)),
                 stats_cell(m.tilt),
@@ -1045,25 +1041,16 @@ impl Report {
     /// Writes the Markdown report, its two SVG charts and the per-sample
     /// CSV beside it.
     pub fn write(&self) -> Result<(), TradeoffError> {
-        let out = &self.config.out;
-        let io = |path: &Path| {
-            let path = path.display().to_string();
-            move |error| TradeoffError::Write { path, error }
-        };
-        if let Some(d) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(d).map_err(io(d))?;
-        }
-        let stem = out
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("speed-vs-accuracy")
-            .to_string();
-        let beside = |suffix: &str| out.with_file_name(format!("{stem}{suffix}"));
-        let write = |path: PathBuf, text: String| std::fs::write(&path, text).map_err(io(&path));
-        write(out.to_path_buf(), self.markdown(&stem))?;
-        write(beside("-repose.svg"), self.chart(false).svg())?;
-        write(beside("-tilt.svg"), self.chart(true).svg())?;
-        write_csv(&beside(".csv"), &self.samples)
+        write_files(
+            &self.config.out,
+            "speed-vs-accuracy",
+            |stem| self.markdown(stem),
+            vec![
+                ("-repose.svg", self.chart(false)),
+                ("-tilt.svg", self.chart(true)),
+            ],
+            &self.samples,
+        )
     }
 
     /// A table of every setting's cost and shifts, for the terminal.
