@@ -2,13 +2,10 @@
 //! box, the right wall is removed, and the pile that stays has the angle of
 //! repose θ_R, measured by the paper's three methods.
 
-use super::pile::{self, BoxSpec, Equilibrium, Pile, PileSpec};
-use super::runner::Findings;
+use super::pile::{self, BoxSpec, Equilibrium, PileSpec, ReleaseJob};
 use super::{Metric, Observer, Protocol};
-use crate::contact::ContactLaw;
-use crate::integrate::Integrator;
-use crate::models::{self, EngineJob, Laws};
-use crate::report::{Outcome, RunReport};
+use crate::models;
+use crate::report::RunReport;
 use crate::scene::{Scene, SceneError, SectionDecl};
 
 pub struct FillRelease;
@@ -61,35 +58,12 @@ impl Protocol for FillRelease {
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let spec = PileSpec::of(scene)?;
-        models::with_engine::<2, _>(
+        let job = ReleaseJob {
             scene,
-            Job {
-                scene,
-                spec,
-                observer,
-            },
-        )
-    }
-}
-
-struct Job<'a> {
-    scene: &'a Scene,
-    spec: PileSpec,
-    observer: &'a mut dyn Observer,
-}
-
-impl EngineJob<2> for Job<'_> {
-    type Output = RunReport;
-
-    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> RunReport {
-        let sim = pile::closed_box::<L, I>(self.scene, &self.spec, laws);
-        let mut pile = Pile::new(sim, self.scene, self.spec, self.observer);
-        let mut findings = Findings::default();
-        let outcome = match pile.released_pile(&mut findings) {
-            Ok(_) => Outcome::Completed,
-            Err(outcome) => outcome,
+            spec: PileSpec::of(scene)?,
+            observer,
+            after: (),
         };
-        pile.run.report(outcome, findings)
+        models::with_engine::<2, _>(scene, job)
     }
 }

@@ -10,10 +10,10 @@ use crate::engine::{Outlet, Simulation};
 use crate::integrate::Integrator;
 use crate::measure::{Profile, SlopeAngles};
 use crate::models::lee_herrmann::GrainSpec;
-use crate::models::Laws;
+use crate::models::{EngineJob, Laws};
 use crate::particles::Particles;
 use crate::preset::Preset;
-use crate::report::{Outcome, Phase, Quantity};
+use crate::report::{Outcome, Phase, Quantity, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS, MAX_PACKING};
 use crate::setup::{random_column, sphere_mass, Stream};
 use crate::theory;
@@ -375,6 +375,52 @@ pub fn engine<L: ContactLaw<2>, I: Integrator<2>>(
 ) -> Simulation<2, L, I> {
     let gravity = Vector::<2>::new(scene.gravity[0], scene.gravity[1]);
     super::runner::engine(scene, particles, walls, gravity, laws.pair)
+}
+
+/// What a box protocol does once its pile is released and has come to
+/// rest: nothing more (`()`, fill and release) or a stage of its own (the
+/// tilt).
+pub trait AfterRelease {
+    /// Runs the stage on the released pile, recording what it measures.
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(
+        &self,
+        pile: &mut Pile<'_, L, I>,
+        findings: &mut Findings,
+    ) -> Outcome;
+}
+
+impl AfterRelease for () {
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(
+        &self,
+        _pile: &mut Pile<'_, L, I>,
+        _findings: &mut Findings,
+    ) -> Outcome {
+        Outcome::Completed
+    }
+}
+
+/// The run of a box protocol: fill the closed box, release the pile
+/// (θ_R by the three methods), then the protocol's own stage `after`.
+pub struct ReleaseJob<'a, A> {
+    pub scene: &'a Scene,
+    pub spec: PileSpec,
+    pub observer: &'a mut dyn Observer,
+    pub after: A,
+}
+
+impl<A: AfterRelease> EngineJob<2> for ReleaseJob<'_, A> {
+    type Output = RunReport;
+
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> RunReport {
+        let sim = closed_box::<L, I>(self.scene, &self.spec, laws);
+        let mut pile = Pile::new(sim, self.scene, self.spec, self.observer);
+        let mut findings = Findings::default();
+        let outcome = match pile.released_pile(&mut findings) {
+            Ok(_) => self.after.run(&mut pile, &mut findings),
+            Err(outcome) => outcome,
+        };
+        pile.run.report(outcome, findings)
+    }
 }
 
 /// A pile protocol in progress.

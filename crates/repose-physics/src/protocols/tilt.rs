@@ -3,13 +3,13 @@
 //! that moment. The run first measures θ_R as fill-and-release does.
 
 use super::fill_release::REPOSE_METRICS;
-use super::pile::{self, BoxSpec, Equilibrium, Pile, PileSpec};
+use super::pile::{self, AfterRelease, BoxSpec, Equilibrium, Pile, PileSpec, ReleaseJob};
 use super::runner::{Findings, Stop};
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
 use crate::dim::Vector;
 use crate::integrate::Integrator;
-use crate::models::{self, EngineJob, Laws};
+use crate::models;
 use crate::report::{Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use serde::{Deserialize, Serialize};
@@ -97,52 +97,37 @@ impl Protocol for Tilt {
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let spec = PileSpec::of(scene)?;
-        let tilt = scene.section()?;
-        models::with_engine::<2, _>(
+        let job = ReleaseJob {
             scene,
-            Job {
-                scene,
-                spec,
-                tilt,
-                observer,
-            },
-        )
+            spec: PileSpec::of(scene)?,
+            observer,
+            after: scene.section::<TiltSpec>()?,
+        };
+        models::with_engine::<2, _>(scene, job)
     }
 }
 
-struct Job<'a> {
-    scene: &'a Scene,
-    spec: PileSpec,
-    tilt: TiltSpec,
-    observer: &'a mut dyn Observer,
-}
-
-impl EngineJob<2> for Job<'_> {
-    type Output = RunReport;
-
-    fn run<L: ContactLaw<2>, I: Integrator<2>>(self, laws: Laws<L>) -> RunReport {
-        let sim = pile::closed_box::<L, I>(self.scene, &self.spec, laws);
-        let mut pile = Pile::new(sim, self.scene, self.spec, self.observer);
-        let mut findings = Findings::default();
-        let outcome = match pile.released_pile(&mut findings) {
-            Err(outcome) => outcome,
-            Ok(_) => match tilt(&mut pile, &self.tilt) {
-                Ok((angle, moved)) => {
-                    findings.metric("theta_t", angle);
-                    findings.details["tilt"] = json!({"angle": angle, "moved": moved});
-                    Outcome::Completed
-                }
-                Err(Stop::TimedOut) => Outcome::NoOnset {
-                    reason: format!(
-                        "the pile did not move before the tilt reached {}°",
-                        self.tilt.max_angle
-                    ),
-                },
-                Err(stop) => stop.outcome(TILT, String::new),
+/// The tilt stage: turn the released pile until it moves.
+impl AfterRelease for TiltSpec {
+    fn run<L: ContactLaw<2>, I: Integrator<2>>(
+        &self,
+        pile: &mut Pile<'_, L, I>,
+        findings: &mut Findings,
+    ) -> Outcome {
+        match tilt(pile, self) {
+            Ok((angle, moved)) => {
+                findings.metric("theta_t", angle);
+                findings.details["tilt"] = json!({"angle": angle, "moved": moved});
+                Outcome::Completed
+            }
+            Err(Stop::TimedOut) => Outcome::NoOnset {
+                reason: format!(
+                    "the pile did not move before the tilt reached {}°",
+                    self.max_angle
+                ),
             },
-        };
-        pile.run.report(outcome, findings)
+            Err(stop) => stop.outcome(TILT, String::new),
+        }
     }
 }
 
