@@ -186,48 +186,58 @@ fn measure_sizes(args: &BenchArgs) -> anyhow::Result<Result<Vec<Row>, String>> {
 
 fn print_table(rows: &[Row], lammps: &HashMap<(String, String), f64>) {
     println!(
-        "{:<8} {:<7} {:<8} {:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
+        "{:<8} {:<7} {:<8} {}",
         "scene",
         "scheme",
         "phase",
-        "grains",
-        "steps",
-        "Mpsteps/s",
-        "neigh",
-        "contact",
-        "walls",
-        "integr",
-        "LAMMPS",
-        "ratio"
+        throughput_header("LAMMPS")
     );
     println!("{:<53}   {:^31}", "", "ns per particle-step, by stage");
     for (size, scheme, p) in rows {
-        let c = &p.counters;
-        let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
         let key = (format!("{size:.0}"), p.phase.to_string());
-        let (peer, ratio) = match lammps.get(&key) {
-            Some(v) => (
-                format!("{:.2}", v / 1e6),
-                format!("{:.2}×", p.particle_steps_per_second / v),
-            ),
-            None => ("-".into(), "-".into()),
-        };
         println!(
-            "{:<8} {:<7} {:<8} {:>11} {:>7} {:>10.2}   {:>7.1} {:>7.1} {:>7.1} {:>7.1}  {:>9} {:>7}",
+            "{:<8} {:<7} {:<8} {}",
             format!("W=H={size}"),
             scheme,
             p.phase,
-            format!("{}→{}", p.grains_start, p.grains_end),
-            p.steps,
-            p.particle_steps_per_second / 1e6,
-            per(c.neighbours),
-            per(c.contacts),
-            per(c.walls),
-            per(c.integrate),
-            peer,
-            ratio
+            throughput_cells(p, lammps.get(&key))
         );
     }
+}
+
+/// The heads of the columns of [`throughput_cells`], the peer named.
+pub(crate) fn throughput_header(peer: &str) -> String {
+    format!(
+        "{:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
+        "grains", "steps", "Mpsteps/s", "neigh", "contact", "walls", "integr", peer, "ratio"
+    )
+}
+
+/// The columns a throughput row shares in the 2D and 3D tables: grains,
+/// steps, million particle-steps a second, nanoseconds a particle-step in
+/// each stage, and the peer's throughput with the ratio to it.
+pub(crate) fn throughput_cells(p: &PhaseThroughput, peer: Option<&f64>) -> String {
+    let c = &p.counters;
+    let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
+    let (peer, ratio) = match peer {
+        Some(v) => (
+            format!("{:.2}", v / 1e6),
+            format!("{:.2}×", p.particle_steps_per_second / v),
+        ),
+        None => ("-".into(), "-".into()),
+    };
+    format!(
+        "{:>11} {:>7} {:>10.2}   {:>7.1} {:>7.1} {:>7.1} {:>7.1}  {:>9} {:>7}",
+        format!("{}→{}", p.grains_start, p.grains_end),
+        p.steps,
+        p.particle_steps_per_second / 1e6,
+        per(c.neighbours),
+        per(c.contacts),
+        per(c.walls),
+        per(c.integrate),
+        peer,
+        ratio
+    )
 }
 
 /// Gear-5 against Verlet for each size and phase measured with both.

@@ -4,7 +4,7 @@
 //! prints the ratio. `--heap --options`: the cost of each 3D physics
 //! option on the same scene.
 
-use crate::bench::BenchArgs;
+use crate::bench::{throughput_cells, throughput_header, BenchArgs};
 use anyhow::Context;
 use repose_physics::bench::heap::{heap_throughput, HeapSteps, LIGGGHTS_HEAP};
 use repose_physics::bench::PhaseThroughput;
@@ -63,19 +63,7 @@ pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&phases)?);
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
-        "{:<9} {:>11} {:>7} {:>10}   {:>7} {:>7} {:>7} {:>7}  {:>9} {:>7}",
-        "phase",
-        "grains",
-        "steps",
-        "Mpsteps/s",
-        "neigh",
-        "contact",
-        "walls",
-        "integr",
-        "LIGGGHTS",
-        "ratio"
-    );
+    println!("{:<9} {}", "phase", throughput_header("LIGGGHTS"));
     println!("{:<41}   {:^31}", "", "ns per particle-step, by stage");
     for p in &phases {
         print_row(p, peer.get(p.phase));
@@ -84,28 +72,7 @@ pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn print_row(p: &PhaseThroughput, peer: Option<&f64>) {
-    let c = &p.counters;
-    let per = |t: f64| 1e9 * t / p.particle_steps.max(1) as f64;
-    let (peer, ratio) = match peer {
-        Some(v) => (
-            format!("{:.2}", v / 1e6),
-            format!("{:.2}×", p.particle_steps_per_second / v),
-        ),
-        None => ("-".into(), "-".into()),
-    };
-    println!(
-        "{:<9} {:>11} {:>7} {:>10.2}   {:>7.1} {:>7.1} {:>7.1} {:>7.1}  {:>9} {:>7}",
-        p.phase,
-        format!("{}→{}", p.grains_start, p.grains_end),
-        p.steps,
-        p.particle_steps_per_second / 1e6,
-        per(c.neighbours),
-        per(c.contacts),
-        per(c.walls),
-        per(c.integrate),
-        peer,
-        ratio
-    );
+    println!("{:<9} {}", p.phase, throughput_cells(p, peer));
 }
 
 /// Particle-steps per second of each 3D option, pouring and settled.
