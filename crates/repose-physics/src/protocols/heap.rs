@@ -2,7 +2,7 @@
 //! onto a square plate with open edges, and the angle of repose is read off
 //! the two side views of the settled heap.
 
-use super::pour::{self, Placer, Region, RestSpec, Scales};
+use super::pour::{self, Placer, PourJob, Region, RestSpec, Scales};
 use super::runner::{Findings, Runner, Stop};
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
@@ -10,16 +10,15 @@ use crate::dim::Vector;
 use crate::engine::{Outlet, Simulation};
 use crate::integrate::Integrator;
 use crate::measure::Profile;
-use crate::models::elekes_parteli::{self, Grains};
+use crate::models::elekes_parteli::Grains;
 use crate::models::{self, EngineJob, Laws};
 use crate::particles::Particles;
-use crate::preset::Preset;
 use crate::report::{Curve, Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
 use crate::setup::Stream;
 use crate::walls::Wall;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::json;
 
 pub struct Heap;
 
@@ -199,13 +198,7 @@ impl Protocol for Heap {
         "pour spheres onto a plate with open edges and measure the settled heap's angle of repose θ_r"
     }
 
-    fn dimensions(&self) -> &'static [usize] {
-        &[3]
-    }
-
-    fn models(&self) -> &'static [&'static str] {
-        &[elekes_parteli::NAME]
-    }
+    pour::poured_protocol!(HeapSpec);
 
     fn sections(&self) -> Vec<SectionDecl> {
         vec![SectionDecl::of::<HeapSpec>(), SectionDecl::of::<RestSpec>()]
@@ -215,47 +208,12 @@ impl Protocol for Heap {
         &METRICS
     }
 
-    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
-        pour::preset(preset)
-    }
-
-    fn check(&self, scene: &Scene, c: &mut Checks) {
-        pour::check_scene(scene, c);
-    }
-
-    /// A grain falling the whole height of the domain.
-    fn impact_speed(&self, scene: &Scene) -> Option<f64> {
-        let spec: HeapSpec = scene.section().ok()?;
-        let d = scene.section::<Grains>().ok()?.diameter;
-        pour::fall_speed(scene, spec.height * d)
-    }
-
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let spec: HeapSpec = scene.section()?;
-        let scales = Scales::of(scene)?;
-        let grains: Grains = scene.section()?;
-        models::with_engine::<3, _>(
-            scene,
-            Job {
-                scene,
-                spec,
-                scales,
-                grains,
-                observer,
-            },
-        )
+        models::with_engine::<3, _>(scene, PourJob::<'_, HeapSpec>::of(scene, observer)?)
     }
 }
 
-struct Job<'a> {
-    scene: &'a Scene,
-    spec: HeapSpec,
-    scales: Scales,
-    grains: Grains,
-    observer: &'a mut dyn Observer,
-}
-
-impl EngineJob<3> for Job<'_> {
+impl EngineJob<3> for PourJob<'_, HeapSpec> {
     type Output = RunReport;
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> RunReport {

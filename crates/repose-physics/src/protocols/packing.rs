@@ -2,23 +2,22 @@
 //! rest at a low solid fraction in a tall column, periodic sideways, settle
 //! on a plate; the packing fraction is read in the middle of the bed.
 
-use super::pour::{self, Placer, Region, RestSpec, Scales};
+use super::pour::{self, Placer, PourJob, Region, RestSpec};
 use super::runner::{Findings, Runner};
 use super::{Metric, Observer, Protocol};
 use crate::contact::ContactLaw;
 use crate::dim::Vector;
 use crate::engine::Simulation;
 use crate::integrate::Integrator;
-use crate::models::elekes_parteli::{self, Grains, Material};
+use crate::models::elekes_parteli::{Grains, Material};
 use crate::models::{self, EngineJob, Laws};
 use crate::particles::Particles;
-use crate::preset::Preset;
 use crate::report::{Curve, Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
 use crate::setup::Stream;
 use crate::walls::Wall;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::json;
 
 pub struct Packing;
 
@@ -145,13 +144,7 @@ impl Protocol for Packing {
         "release spheres from rest in a periodic column and measure the packing fraction φ of the settled bed"
     }
 
-    fn dimensions(&self) -> &'static [usize] {
-        &[3]
-    }
-
-    fn models(&self) -> &'static [&'static str] {
-        &[elekes_parteli::NAME]
-    }
+    pour::poured_protocol!(PackingSpec);
 
     fn sections(&self) -> Vec<SectionDecl> {
         vec![
@@ -164,47 +157,12 @@ impl Protocol for Packing {
         &METRICS
     }
 
-    fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)> {
-        pour::preset(preset)
-    }
-
-    fn check(&self, scene: &Scene, c: &mut Checks) {
-        pour::check_scene(scene, c);
-    }
-
-    /// A grain falling the whole height of the domain.
-    fn impact_speed(&self, scene: &Scene) -> Option<f64> {
-        let spec: PackingSpec = scene.section().ok()?;
-        let d = scene.section::<Grains>().ok()?.diameter;
-        pour::fall_speed(scene, spec.height * d)
-    }
-
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let spec: PackingSpec = scene.section()?;
-        let scales = Scales::of(scene)?;
-        let grains: Grains = scene.section()?;
-        models::with_engine::<3, _>(
-            scene,
-            Job {
-                scene,
-                spec,
-                scales,
-                grains,
-                observer,
-            },
-        )?
+        models::with_engine::<3, _>(scene, PourJob::<'_, PackingSpec>::of(scene, observer)?)?
     }
 }
 
-struct Job<'a> {
-    scene: &'a Scene,
-    spec: PackingSpec,
-    scales: Scales,
-    grains: Grains,
-    observer: &'a mut dyn Observer,
-}
-
-impl EngineJob<3> for Job<'_> {
+impl EngineJob<3> for PourJob<'_, PackingSpec> {
     type Output = Result<RunReport, SceneError>;
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> Self::Output {

@@ -4,6 +4,7 @@
 //! settling criterion.
 
 use super::runner::{Runner, Stop};
+use super::Observer;
 use crate::contact::ContactLaw;
 use crate::dim::Vector;
 use crate::engine::{RestRule, Simulation};
@@ -16,6 +17,60 @@ use crate::setup::Stream;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;
+
+/// The methods the poured protocols (heap, packing) share: 3D spheres of
+/// Elekes & Parteli's model, the pour presets and checks, and the fastest
+/// impact, a grain falling the domain's height (`$spec`'s `height`, in
+/// diameters).
+macro_rules! poured_protocol {
+    ($spec:ty) => {
+        fn dimensions(&self) -> &'static [usize] {
+            &[3]
+        }
+
+        fn models(&self) -> &'static [&'static str] {
+            &[$crate::models::elekes_parteli::NAME]
+        }
+
+        fn preset(&self, preset: $crate::preset::Preset) -> Vec<(&'static str, serde_json::Value)> {
+            $crate::protocols::pour::preset(preset)
+        }
+
+        fn check(&self, scene: &$crate::scene::Scene, c: &mut $crate::scene::Checks) {
+            $crate::protocols::pour::check_scene(scene, c);
+        }
+
+        fn impact_speed(&self, scene: &$crate::scene::Scene) -> Option<f64> {
+            let spec: $spec = scene.section().ok()?;
+            let grains: $crate::models::elekes_parteli::Grains = scene.section().ok()?;
+            $crate::protocols::pour::fall_speed(scene, spec.height * grains.diameter)
+        }
+    };
+}
+pub(crate) use poured_protocol;
+
+/// A poured protocol's run, handed to the engine: its scene, its own
+/// section `spec`, the scales, the grains and the observer.
+pub struct PourJob<'a, S> {
+    pub scene: &'a Scene,
+    pub spec: S,
+    pub scales: Scales,
+    pub grains: Grains,
+    pub observer: &'a mut dyn Observer,
+}
+
+impl<'a, S: Section> PourJob<'a, S> {
+    /// Reads the sections the run needs from a validated scene.
+    pub fn of(scene: &'a Scene, observer: &'a mut dyn Observer) -> Result<Self, SceneError> {
+        Ok(PourJob {
+            scene,
+            spec: scene.section()?,
+            scales: Scales::of(scene)?,
+            grains: scene.section()?,
+            observer,
+        })
+    }
+}
 
 /// The length and time scales of a scene: the reference diameter `d`, the
 /// gravity `g` and `√(d/g)`.
