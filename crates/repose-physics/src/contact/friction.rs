@@ -1,8 +1,8 @@
 //! Tangential forces of Lee & Herrmann's eq. (2b).
 
+use super::spring::{self, TangentialSpring};
 use super::{Shear, TangentialLaw, Touch};
 use crate::dim::{Dim, Space};
-use serde::{Deserialize, Serialize};
 
 /// No tangential force at all.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -45,17 +45,12 @@ pub struct CundallStrack<const TRUNCATE: bool> {
     pub mu: f64,
 }
 
-/// The Cundall–Strack spring of one contact: total shear displacement, cm.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct ShearSpring<S> {
-    pub displacement: S,
-}
-
 impl<const D: usize, const TRUNCATE: bool> TangentialLaw<D> for CundallStrack<TRUNCATE>
 where
     Dim<D>: Space<D>,
 {
-    type History = ShearSpring<Shear<D>>;
+    /// The Cundall–Strack spring: the total shear displacement, cm.
+    type History = TangentialSpring<Shear<D>>;
 
     #[inline(always)]
     fn force(
@@ -66,8 +61,7 @@ where
         normal_force: f64,
         dt: f64,
     ) -> Shear<D> {
-        let ds = <Dim<D> as Space<D>>::follow_normal(history.displacement, &touch.normal)
-            + tangential_velocity * dt;
+        let ds = spring::stretched(history, tangential_velocity, touch, dt);
         let stretch = <Dim<D> as Space<D>>::magnitude(ds);
         // The Coulomb limit: an attractive (raw-law) normal force gives no grip.
         let limit = self.mu * normal_force.max(0.0);
@@ -86,12 +80,11 @@ where
     }
 
     fn elastic_energy(&self, history: &Self::History, _touch: &Touch<D>) -> f64 {
-        let s = <Dim<D> as Space<D>>::magnitude(history.displacement);
-        0.5 * self.k_s * s * s
+        spring::energy(history, self.k_s)
     }
 
     fn flip(history: &mut Self::History) {
-        history.displacement = <Dim<D> as Space<D>>::shear_flip(history.displacement);
+        spring::flip(history);
     }
 }
 

@@ -20,13 +20,15 @@ mod friction;
 mod hertz;
 pub mod restitution;
 mod rolling;
+mod spring;
 mod viscoelastic;
 
 pub use cohesion::{Limits, VanDerWaals};
-pub use friction::{CundallStrack, Frictionless, ShearSpring};
+pub use friction::{CundallStrack, Frictionless};
 pub use hertz::HertzDamped;
 pub use rolling::{Epsd2, RollingSpring};
-pub use viscoelastic::{Cap, MindlinSpring, TangentialSpring, ViscoelasticHertz};
+pub use spring::TangentialSpring;
+pub use viscoelastic::{Cap, MindlinSpring, ViscoelasticHertz};
 
 use crate::dim::{Dim, Space, Vector};
 use serde::de::DeserializeOwned;

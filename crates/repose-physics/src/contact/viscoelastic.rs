@@ -3,9 +3,9 @@
 //! `√(R_eff δ)`, so a collision's restitution depends on its speed as it
 //! does for real viscoelastic spheres.
 
+use super::spring::{self, TangentialSpring};
 use super::{NormalLaw, Shear, TangentialLaw, Touch};
 use crate::dim::{Dim, Space};
-use serde::{Deserialize, Serialize};
 
 /// `F_n = max(0, k_n δ^{3/2} + (3/2) A_n k_n √δ δ̇)` with
 /// `k_n = (2Y / (3(1 − ν²))) √R_eff` (eq. 10): never attractive.
@@ -86,16 +86,11 @@ pub struct MindlinSpring {
     pub cap: Cap,
 }
 
-/// The tangential displacement `ξ` of one contact, m.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct TangentialSpring<S> {
-    pub displacement: S,
-}
-
 impl<const D: usize> TangentialLaw<D> for MindlinSpring
 where
     Dim<D>: Space<D>,
 {
+    /// The tangential displacement `ξ`, m.
     type History = TangentialSpring<Shear<D>>;
 
     #[inline(always)]
@@ -109,8 +104,7 @@ where
     ) -> Shear<D> {
         let a = contact_radius(touch);
         let (k, c) = (self.modulus * a, self.damping * a);
-        let xi = <Dim<D> as Space<D>>::follow_normal(history.displacement, &touch.normal)
-            + tangential_velocity * dt;
+        let xi = spring::stretched(history, tangential_velocity, touch, dt);
         let spring = xi * -k;
         let damper = tangential_velocity * -c;
         let limit = self.mu * normal_force;
@@ -140,13 +134,11 @@ where
     }
 
     fn elastic_energy(&self, history: &Self::History, touch: &Touch<D>) -> f64 {
-        let k = self.modulus * contact_radius(touch);
-        let s = <Dim<D> as Space<D>>::magnitude(history.displacement);
-        0.5 * k * s * s
+        spring::energy(history, self.modulus * contact_radius(touch))
     }
 
     fn flip(history: &mut Self::History) {
-        history.displacement = <Dim<D> as Space<D>>::shear_flip(history.displacement);
+        spring::flip(history);
     }
 }
 
