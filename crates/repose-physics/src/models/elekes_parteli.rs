@@ -622,11 +622,12 @@ pub fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, 
                 Scheme::Verlet => VelocityVerlet,
             };
             C = m.coheres() => { true => VanDerWaals, false => NoCohesion };
-            => match (m.rotation, m.rolls()) {
-                (true, true) => go::<J, Law<Epsd2, C, true>, I>(job, law(&pair), law(&plate)),
-                (true, false) => go::<J, Law<NoRolling, C, true>, I>(job, law(&pair), law(&plate)),
-                (false, _) => go::<J, Law<NoRolling, C, false>, I>(job, law(&pair), law(&plate)),
-            }
+            L = (m.rotation, m.rolls()) => {
+                (true, true) => Law<Epsd2, C, true>,
+                (true, false) => Law<NoRolling, C, true>,
+                (false, _) => Law<NoRolling, C, false>,
+            };
+            => go::<J, L, I>(job, law(&pair), law(&plate))
         }
     };
     Ok(run(job))
