@@ -14,7 +14,8 @@ use repose_physics::contact::{
 use repose_physics::dim::Vector;
 use repose_physics::engine::Simulation;
 use repose_physics::integrate::{Gear5, Integrator, VelocityVerlet};
-use repose_physics::models::elekes_parteli::{self, law, FromParts, Kind, Law, Parts};
+use repose_physics::models::elekes_parteli::{self, law, Kind, Law, Parts};
+use repose_physics::models::Build;
 use repose_physics::particles::Particles;
 use repose_physics::walls::Wall;
 use repose_physics::Scene;
@@ -54,8 +55,8 @@ fn sim<R, C, const ROT: bool, I: Integrator<3>>(
     dt: f64,
 ) -> Simulation<3, Law<R, C, ROT>, I>
 where
-    R: FromParts + RollingLaw<3>,
-    C: FromParts + CohesionLaw<3>,
+    R: Build<Parts> + RollingLaw<3>,
+    C: Build<Parts> + CohesionLaw<3>,
 {
     let mut p = Particles::<3>::new(ROT);
     for (x, v) in grains {
@@ -199,7 +200,7 @@ fn restitution_at_other_speeds_and_stiffnesses_follows_the_integrated_collision(
 
 /// A sphere released on a plane sloping down along +x at `alpha`;
 /// returns its acceleration along the slope and its slip speed at the end.
-fn incline<R: FromParts + RollingLaw<3>>(
+fn incline<R: Build<Parts> + RollingLaw<3>>(
     parts: (Parts, Parts),
     alpha: f64,
     duration: f64,
@@ -463,7 +464,7 @@ fn a_pair_hanging_under_tension_keeps_friction_only_with_the_absolute_net_force(
 }
 
 /// Eight spheres in free space with random velocities and spins, colliding.
-fn cloud<R: FromParts + RollingLaw<3>, const ROT: bool>(
+fn cloud<R: Build<Parts> + RollingLaw<3>, const ROT: bool>(
     parts: (Parts, Parts),
 ) -> Simulation<3, Law<R, NoCohesion, ROT>, VelocityVerlet> {
     let mut grains = Vec::new();

@@ -5,7 +5,7 @@
 //! plate is made of the grains' material but has no cohesion. Every gap the
 //! paper leaves open is pinned in `docs/model.md`.
 
-use super::{select, EngineJob, Laws, Model};
+use super::{assemble, select, Build, EngineJob, Laws, Model};
 use crate::contact::{
     restitution, Cap, ContactLaw, Epsd2, Limits, MindlinSpring, NoCohesion, NoRolling, Pairwise,
     VanDerWaals, ViscoelasticHertz,
@@ -537,31 +537,26 @@ impl Parts {
     }
 }
 
-/// Builds a law from the parts it uses.
-pub trait FromParts {
-    fn from_parts(p: &Parts) -> Self;
-}
-
-impl FromParts for NoRolling {
-    fn from_parts(_: &Parts) -> Self {
-        NoRolling
+impl Build<Parts> for ViscoelasticHertz {
+    fn build(p: &Parts) -> Self {
+        p.normal
     }
 }
 
-impl FromParts for Epsd2 {
-    fn from_parts(p: &Parts) -> Self {
+impl Build<Parts> for MindlinSpring {
+    fn build(p: &Parts) -> Self {
+        p.tangential
+    }
+}
+
+impl Build<Parts> for Epsd2 {
+    fn build(p: &Parts) -> Self {
         p.rolling
     }
 }
 
-impl FromParts for NoCohesion {
-    fn from_parts(_: &Parts) -> Self {
-        NoCohesion
-    }
-}
-
-impl FromParts for VanDerWaals {
-    fn from_parts(p: &Parts) -> Self {
+impl Build<Parts> for VanDerWaals {
+    fn build(p: &Parts) -> Self {
         p.cohesion
     }
 }
@@ -570,13 +565,8 @@ impl FromParts for VanDerWaals {
 pub type Law<R, C, const ROT: bool> = Pairwise<ViscoelasticHertz, MindlinSpring, R, C, ROT>;
 
 /// The law with rolling law `R`, cohesion `C` and rotation `ROT` from its parts.
-pub fn law<R: FromParts, C: FromParts, const ROT: bool>(p: &Parts) -> Law<R, C, ROT> {
-    Pairwise {
-        normal: p.normal,
-        tangential: p.tangential,
-        rolling: R::from_parts(p),
-        cohesion: C::from_parts(p),
-    }
+pub fn law<R: Build<Parts>, C: Build<Parts>, const ROT: bool>(p: &Parts) -> Law<R, C, ROT> {
+    assemble(p)
 }
 
 /// The grains and the material as simulated.

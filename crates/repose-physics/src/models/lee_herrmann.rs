@@ -4,7 +4,7 @@
 //! own stiffness. The law is written for any dimension: discs in the paper's
 //! plane, and spheres in space.
 
-use super::{select, EngineJob, Laws, Model};
+use super::{assemble, select, Build, EngineJob, Laws, Model};
 use crate::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
 use crate::dim::{Dim, Space};
 use crate::doc::Doc;
@@ -288,12 +288,7 @@ struct Params {
     mu: f64,
 }
 
-/// A contact-law component built from the model's parameters.
-trait Component {
-    fn build(p: &Params) -> Self;
-}
-
-impl<const FLOOR: bool> Component for HertzDamped<FLOOR> {
+impl<const FLOOR: bool> Build<Params> for HertzDamped<FLOOR> {
     fn build(p: &Params) -> Self {
         HertzDamped {
             k_n: p.k_n,
@@ -302,13 +297,7 @@ impl<const FLOOR: bool> Component for HertzDamped<FLOOR> {
     }
 }
 
-impl Component for Frictionless {
-    fn build(_: &Params) -> Self {
-        Frictionless
-    }
-}
-
-impl<const TRUNCATE: bool> Component for CundallStrack<TRUNCATE> {
+impl<const TRUNCATE: bool> Build<Params> for CundallStrack<TRUNCATE> {
     fn build(p: &Params) -> Self {
         CundallStrack {
             k_s: p.k_s,
@@ -327,11 +316,10 @@ enum Friction {
 }
 
 /// The pair and wall laws from the chosen components.
-fn laws<N: Component, T: Component>(m: &Material) -> Laws<Pairwise<N, T>> {
-    let (p, w) = (m.pair(), m.wall());
+fn laws<N: Build<Params>, T: Build<Params>>(m: &Material) -> Laws<Pairwise<N, T>> {
     Laws {
-        pair: Pairwise::new(N::build(&p), T::build(&p)),
-        wall: Pairwise::new(N::build(&w), T::build(&w)),
+        pair: assemble(&m.pair()),
+        wall: assemble(&m.wall()),
     }
 }
 

@@ -14,13 +14,55 @@
 pub mod elekes_parteli;
 pub mod lee_herrmann;
 
-use crate::contact::ContactLaw;
+use crate::contact::{ContactLaw, Frictionless, NoCohesion, NoRolling, Pairwise};
 use crate::dim::{Dim, Space};
 use crate::doc::Doc;
 use crate::engine::Units;
 use crate::integrate::Integrator;
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};
 use std::collections::BTreeMap;
+
+/// A contact-law component built from a model's parameters `P` for one
+/// kind of contact (grain–grain or grain–wall). Both models build their
+/// laws this way; an option that is off builds from nothing.
+pub trait Build<P> {
+    fn build(p: &P) -> Self;
+}
+
+impl<P> Build<P> for Frictionless {
+    fn build(_: &P) -> Self {
+        Frictionless
+    }
+}
+
+impl<P> Build<P> for NoRolling {
+    fn build(_: &P) -> Self {
+        NoRolling
+    }
+}
+
+impl<P> Build<P> for NoCohesion {
+    fn build(_: &P) -> Self {
+        NoCohesion
+    }
+}
+
+/// The contact law of the components `N`, `T`, `R`, `C` (rotating if
+/// `ROT`), each built from the parameters `p`.
+pub fn assemble<P, N, T, R, C, const ROT: bool>(p: &P) -> Pairwise<N, T, R, C, ROT>
+where
+    N: Build<P>,
+    T: Build<P>,
+    R: Build<P>,
+    C: Build<P>,
+{
+    Pairwise {
+        normal: N::build(p),
+        tangential: T::build(p),
+        rolling: R::build(p),
+        cohesion: C::build(p),
+    }
+}
 
 /// A contact model as the scene and the registry see it.
 pub trait Model: Sync {
