@@ -414,6 +414,15 @@ fn the_form_and_the_reports(tab: &mut Page) {
         "document.querySelector('#speed-accuracy .doc table')",
     );
     assert!(count(tab, "#speed-accuracy .doc table") >= 3);
+    // Its list of reports links every paper's, as the studies name them.
+    let linked = tab.evaluate(
+        "Array.from(document.querySelectorAll('ul.reports a')).map(a => a.getAttribute('href')).join(' ')",
+    );
+    for paper in repose_studies::papers::PAPERS {
+        let href = format!("#/doc/{}", paper.report);
+        let listed = linked.as_str().unwrap().split(' ').any(|h| h == href);
+        assert!(listed, "{href} in {linked}");
+    }
     assert_eq!(count(tab, "#speed-accuracy .doc img"), 2);
     let loaded = wait_for(
         tab,
