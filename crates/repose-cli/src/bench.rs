@@ -117,9 +117,6 @@ fn steps_for(size: f64) -> (u64, u64) {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
-    if args.heap {
-        return crate::bench3d::heap(&args);
-    }
     if args.options {
         return option_costs(&args);
     }

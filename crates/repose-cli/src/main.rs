@@ -16,6 +16,7 @@ mod admin;
 mod bench;
 mod bench3d;
 mod bench_service;
+mod client;
 mod output;
 mod reproduce;
 mod service;
@@ -105,6 +106,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run(args),
+        Command::Bench(args) if args.heap => bench3d::heap(&args),
         Command::Bench(args) => bench::run(args),
         Command::BenchService(args) => bench_service::run_bench(args),
         Command::Tradeoff(args) => tradeoff::run(args),

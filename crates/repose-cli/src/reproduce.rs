@@ -258,7 +258,7 @@ async fn reproduce(
     server: &str,
     clock: Instant,
 ) -> anyhow::Result<ExitCode> {
-    let client = crate::admin::http()?;
+    let client = crate::client::http()?;
     let out = out_of(args, paper);
     let queued = queue_all(&client, args, paper, server).await?;
     wait(&client, server, &queued, args.quiet).await?;

@@ -364,7 +364,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     let spec = read_spec(&args.spec)?;
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
-        let client = crate::admin::http()?;
+        let client = crate::client::http()?;
         let (status, body) = post_sweep(&client, &server, &spec).await?;
         if !status.is_success() {
             eprintln!("error: the server refused the sweep ({})", status.as_u16());
@@ -466,7 +466,7 @@ fn points_table(points: &Value, protocol: &str) -> String {
 pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
-        let client = crate::admin::http()?;
+        let client = crate::client::http()?;
         match args.sweep {
             None => {
                 let list = get_json(&client, &format!("{server}/api/sweeps")).await?;

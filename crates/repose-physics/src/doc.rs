@@ -53,7 +53,7 @@ pub fn parse(text: &str) -> Result<Doc, DocError> {
 pub fn parse_assignment(assignment: &str) -> Result<(String, Value), DocError> {
     let Some((key, raw)) = assignment.split_once('=') else {
         return Err(DocError::new(
-            crate::scene::checks::shown_key(assignment),
+            shown_key(assignment),
             "an override is written key=value, e.g. contact.mu=0.3",
         ));
     };
@@ -71,10 +71,7 @@ pub fn parse_assignment(assignment: &str) -> Result<(String, Value), DocError> {
 
 fn check_path(key: &str) -> Result<(), DocError> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(DocError::new(
-            crate::scene::checks::shown_key(key),
-            "empty segment in the key",
-        ));
+        return Err(DocError::new(shown_key(key), "empty segment in the key"));
     }
     Ok(())
 }
@@ -160,6 +157,15 @@ pub fn drop_nulls(v: Value) -> Value {
         ),
         Value::Array(a) => Value::Array(a.into_iter().map(drop_nulls).collect()),
         other => other,
+    }
+}
+
+/// A field's path as errors show it: an empty key is named as such.
+pub(crate) fn shown_key(field: &str) -> String {
+    if field.is_empty() {
+        "(empty key)".into()
+    } else {
+        field.to_string()
     }
 }
 

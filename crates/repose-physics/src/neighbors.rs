@@ -18,7 +18,7 @@
 //! shift: the pair's separation is `x_i − x_j − shift`.
 
 use crate::dim::{Dim, Space, Vector};
-use crate::engine::Periodic;
+use crate::engine::boundary::Periodic;
 use crate::particles::Particles;
 use serde::{Deserialize, Serialize};
 

@@ -20,7 +20,7 @@
 //! single thread, so the same scene and seed give bit-identical results on
 //! the same build and machine whatever the number of threads.
 
-mod boundary;
+pub(crate) mod boundary;
 mod energy;
 mod forces;
 mod order;

@@ -1,6 +1,6 @@
 //! Validation errors that name their field, and the checks that collect them.
 
-use crate::doc::DocError;
+use crate::doc::{shown_key, DocError};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -114,14 +114,5 @@ impl Checks {
         } else {
             Err(SceneError { errors: self.0 })
         }
-    }
-}
-
-/// A field's path as errors show it: an empty key is named as such.
-pub(crate) fn shown_key(field: &str) -> String {
-    if field.is_empty() {
-        "(empty key)".into()
-    } else {
-        field.to_string()
     }
 }
