@@ -9,19 +9,7 @@ use serde_json::{json, Value};
 use tower::ServiceExt;
 
 async fn store() -> Store {
-    let dir =
-        std::env::temp_dir().join(format!("repose-api-{}-{}", std::process::id(), rand_name()));
-    std::fs::create_dir_all(&dir).unwrap();
-    Store::open(&format!("sqlite://{}", dir.join("api.db").display()))
-        .await
-        .unwrap()
-}
-
-fn rand_name() -> u128 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap()
-        .as_nanos()
+    repose_testkit::sqlite("repose-api").await
 }
 
 async fn call(

@@ -854,13 +854,7 @@ fn check_schemas(node: &Value, schemas: &mut Schemas) {
 
 /// The store's ids and the registries' key pairs, read through the API.
 async fn real_values(store: &Store, sweep: String) -> Real {
-    let samples = common::get_json(store, &format!("/api/sweeps/{sweep}/samples")).await;
-    let hashes = samples["samples"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|s| s["sample_hash"].as_str().map(String::from))
-        .collect();
+    let hashes = common::sample_hashes(store, &sweep).await;
     let studies = common::get_json(store, "/api/studies").await;
     let mut study_sweeps = Vec::new();
     let mut study_figures = Vec::new();

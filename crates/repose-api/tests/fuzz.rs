@@ -327,13 +327,7 @@ async fn send(
 async fn seeded() -> (Store, BTreeMap<&'static str, Vec<String>>, Value) {
     let spec = common::small_sweep();
     let (store, id) = common::store_with_finished_sweep("fuzz", &spec).await;
-    let samples = common::get_json(&store, &format!("/api/sweeps/{id}/samples")).await;
-    let hashes = samples["samples"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|s| s["sample_hash"].as_str().map(String::from))
-        .collect();
+    let hashes = common::sample_hashes(&store, &id).await;
     let study = common::get_json(&store, "/api/studies/lh93").await;
     let keys = |field: &str| -> Vec<String> {
         study[field]

@@ -32,18 +32,22 @@ pub async fn get_json(store: &Store, uri: &str) -> Value {
     serde_json::from_slice(&bytes).unwrap()
 }
 
-/// A new SQLite store in `name` under the temporary folder, holding `spec`
-/// queued through the API and run to the end; the store and the sweep's id.
+/// The sample hashes of a sweep, read through the API.
+pub async fn sample_hashes(store: &Store, sweep: &str) -> Vec<String> {
+    let samples = get_json(store, &format!("/api/sweeps/{sweep}/samples")).await;
+    samples["samples"]
+        .as_array()
+        .expect("a sweep's samples are a list")
+        .iter()
+        .filter_map(|s| s["sample_hash"].as_str().map(String::from))
+        .collect()
+}
+
+/// A new SQLite store in a scratch folder named after `name`, holding
+/// `spec` queued through the API and run to the end; the store and the
+/// sweep's id.
 pub async fn store_with_finished_sweep(name: &str, spec: &Value) -> (Store, String) {
-    let dir = std::env::temp_dir().join(format!("repose-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join(format!("{name}.db"));
-    for suffix in ["", "-wal", "-shm"] {
-        let _ = std::fs::remove_file(format!("{}{suffix}", file.display()));
-    }
-    let store = Store::open(&format!("sqlite://{}", file.display()))
-        .await
-        .unwrap();
+    let store = repose_testkit::sqlite(&format!("repose-{name}")).await;
     let req = Request::post("/api/sweeps")
         .header("content-type", "application/json")
         .body(Body::from(spec.to_string()))
