@@ -13,8 +13,8 @@
 //! * **Pure.** This crate knows nothing of databases, HTTP, files or
 //!   async. A [`Scene`] goes in, a [`RunReport`] comes out; the same scene,
 //!   seed and build give the same numbers. The only threads it starts are
-//!   a sample's own (`numerics.threads`), which share the pair loop without
-//!   changing a bit of the result.
+//!   a sample's own (`numerics.threads`), which share the pair and wall
+//!   contacts without changing a bit of the result.
 //! * **Plug-ins at the seams.** A protocol ([`protocols::Protocol`]) and a
 //!   contact model ([`models::Model`]) each live in one module and declare
 //!   what the rest of the project needs: their scene sections with defaults

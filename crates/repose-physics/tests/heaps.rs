@@ -7,7 +7,7 @@
 
 use repose_physics::contact::{Epsd2, NoCohesion};
 use repose_physics::dim::Vector;
-use repose_physics::engine::{RestRule, Simulation};
+use repose_physics::engine::{Blowup, RestRule, Simulation};
 use repose_physics::integrate::VelocityVerlet;
 use repose_physics::models::elekes_parteli::{self, law, Law, Parts};
 use repose_physics::particles::Particles;
@@ -324,6 +324,36 @@ fn threads_share_the_pair_loop_without_changing_a_bit() {
     assert_eq!(one.particles.vel, two.particles.vel);
     assert_eq!(one.particles.omega, two.particles.omega);
     assert_eq!(one.neighbors.history, two.neighbors.history);
+    // The floor's contacts are shared too, each grain with its own share.
+    let on_floor = |s: &Engine| {
+        s.wall_contacts.history[0]
+            .iter()
+            .filter(|h| **h != Default::default())
+            .count()
+    };
+    println!("{} grains on the floor", on_floor(&one));
+    assert!(on_floor(&one) > 50);
+    assert_eq!(one.wall_contacts.history, two.wall_contacts.history);
+}
+
+/// A grain driven through the floor fails the run with the same grain,
+/// wall and time on two threads as on one.
+#[test]
+fn a_grain_through_the_floor_fails_alike_on_two_threads() {
+    let failure = |threads: usize| {
+        let mut s = bed();
+        s.set_threads(threads).unwrap();
+        s.min_shared_pairs = 0;
+        s.guards.max_overlap = f64::INFINITY;
+        s.run(10).unwrap();
+        let last = s.particles.len() - 1;
+        s.particles.pos[0].z = -0.1e-3;
+        s.particles.pos[last].z = -0.1e-3;
+        s.run(5).unwrap_err()
+    };
+    let one = failure(1);
+    assert!(matches!(one, Blowup::ThroughWall { wall: 0, .. }), "{one}");
+    assert_eq!(one, failure(2));
 }
 
 #[test]

@@ -8,6 +8,8 @@ use crate::contact::{ContactLaw, Response, Touch};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::particles::Particles;
+use crate::walls::Wall;
+use std::sync::Arc;
 
 impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
 where
@@ -25,21 +27,25 @@ where
         }
     }
 
-    /// Gravity and every pair; fails if a pair overlaps beyond the guard.
-    pub(super) fn pair_forces(&mut self) -> Result<(), Blowup> {
-        let pool = self
-            .pool
+    /// The pool to share this step's forces on, if it has one and the
+    /// step is long enough to pay for waking it.
+    pub(super) fn sharing(&self) -> Option<Arc<rayon::ThreadPool>> {
+        self.pool
             .clone()
-            .filter(|_| self.neighbors.pairs.len() >= self.min_shared_pairs);
+            .filter(|_| self.neighbors.pairs.len() >= self.min_shared_pairs)
+    }
+
+    /// Gravity and every pair on one thread; fails if a pair overlaps
+    /// beyond the guard.
+    pub(super) fn pair_forces(&mut self) -> Result<(), Blowup> {
         if self.rest.is_some() {
             self.wake.resize(self.particles.len());
         }
-        let worst = match (pool, self.periodic.is_some(), self.rest.is_some()) {
-            (Some(pool), _, _) => self.pair_forces_shared(&pool),
-            (None, false, false) => self.pair_forces_serial::<false, false>(),
-            (None, true, false) => self.pair_forces_serial::<true, false>(),
-            (None, false, true) => self.pair_forces_serial::<false, true>(),
-            (None, true, true) => self.pair_forces_serial::<true, true>(),
+        let worst = match (self.periodic.is_some(), self.rest.is_some()) {
+            (false, false) => self.pair_forces_serial::<false, false>(),
+            (true, false) => self.pair_forces_serial::<true, false>(),
+            (false, true) => self.pair_forces_serial::<false, true>(),
+            (true, true) => self.pair_forces_serial::<true, true>(),
         };
         self.overlap_guard(worst)
     }
@@ -86,7 +92,7 @@ where
         worst
     }
 
-    fn overlap_guard(&mut self, (worst, pair): (f64, usize)) -> Result<(), Blowup> {
+    pub(super) fn overlap_guard(&mut self, (worst, pair): (f64, usize)) -> Result<(), Blowup> {
         self.max_overlap_seen = self.max_overlap_seen.max(worst);
         if worst > self.guards.max_overlap {
             let [a, b] = self.neighbors.pairs[pair];
@@ -104,37 +110,22 @@ where
     /// Every grain touching a wall.
     pub(super) fn wall_forces(&mut self) -> Result<(), Blowup> {
         let p = &mut self.particles;
-        let dt = self.dt;
         for (w, wall) in self.walls.iter().enumerate() {
-            let law = self.wall_laws[w];
+            let law = &self.wall_laws[w];
             let cands = &self.wall_contacts.candidates[w];
             let history = &mut self.wall_contacts.history[w];
-            for k in 0..cands.len() {
-                let i = cands[k] as usize;
-                if p.resting.get(i) == Some(&true) {
-                    // At rest on the wall: the contact keeps its spring.
-                    continue;
-                }
-                let dist = wall.distance(&p.pos[i]);
-                let overlap = p.radius[i] - dist;
-                if overlap <= 0.0 || !wall.covers(&p.pos[i]) {
-                    history[k] = Default::default();
-                    continue;
-                }
-                if dist < 0.0 {
-                    return Err(Blowup::ThroughWall {
-                        id: p.id[i],
-                        wall: w,
-                        time: self.time,
-                    });
-                }
-                let fraction = overlap / p.radius[i];
-                self.max_overlap_seen = self.max_overlap_seen.max(fraction);
-                let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
-                let response = law.force(&touch, &mut history[k], dt);
-                p.force[i] += response.force;
-                if L::ROTATES {
-                    p.torque[i] += response.torque_i;
+            for (k, &i) in cands.iter().enumerate() {
+                let i = i as usize;
+                match wall_response(law, wall, p, i, &mut history[k], self.dt) {
+                    Err(()) => return Err(through_wall(p, i, w, self.time)),
+                    Ok(None) => {}
+                    Ok(Some((response, fraction))) => {
+                        self.max_overlap_seen = self.max_overlap_seen.max(fraction);
+                        p.force[i] += response.force;
+                        if L::ROTATES {
+                            p.torque[i] += response.torque_i;
+                        }
+                    }
                 }
             }
         }
@@ -169,6 +160,56 @@ pub(super) fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
         b
     } else {
         a
+    }
+}
+
+/// What `wall` does to grain `i`, and its overlap as a fraction of the
+/// radius: `None` if the grain rests (its spring keeps what it held) or
+/// does not touch (its spring is reset), an error if its centre is past
+/// the plane.
+#[inline(always)]
+pub(super) fn wall_response<const D: usize, L: ContactLaw<D>>(
+    law: &L,
+    wall: &Wall<D>,
+    p: &Particles<D>,
+    i: usize,
+    history: &mut L::History,
+    dt: f64,
+) -> Result<Option<(Response<D>, f64)>, ()>
+where
+    Dim<D>: Space<D>,
+{
+    if p.resting.get(i) == Some(&true) {
+        return Ok(None);
+    }
+    let dist = wall.distance(&p.pos[i]);
+    let overlap = p.radius[i] - dist;
+    if overlap <= 0.0 || !wall.covers(&p.pos[i]) {
+        *history = Default::default();
+        return Ok(None);
+    }
+    if dist < 0.0 {
+        return Err(());
+    }
+    let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
+    let response = law.force(&touch, history, dt);
+    Ok(Some((response, overlap / p.radius[i])))
+}
+
+/// The failure of grain `i` found past wall `w`.
+pub(super) fn through_wall<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    w: usize,
+    time: f64,
+) -> Blowup
+where
+    Dim<D>: Space<D>,
+{
+    Blowup::ThroughWall {
+        id: p.id[i],
+        wall: w,
+        time,
     }
 }
 

@@ -232,7 +232,7 @@ where
             primed: false,
             sort_every: 0,
             sorted_at: None,
-            min_shared_pairs: 8192,
+            min_shared_pairs: 2048,
             pool: None,
             shares: share::Shares::default(),
             rest: None,
@@ -327,14 +327,29 @@ where
 
     /// Runs `n` steps.
     pub fn run(&mut self, n: u64) -> Result<(), Blowup> {
+        if let Some(pool) = self.pool.clone() {
+            // On one of the pool's threads, so that sharing a step wakes
+            // one thread fewer.
+            return pool.install(|| self.run_here(n));
+        }
+        self.run_here(n)
+    }
+
+    fn run_here(&mut self, n: u64) -> Result<(), Blowup> {
         for _ in 0..n {
             self.step()?;
         }
         Ok(())
     }
 
+    /// Forces of this step, with the time of the contact and the wall
+    /// stages (shared among threads, both are one pass, timed as contacts).
     fn compute_forces_timed(&mut self) -> Result<(Duration, Duration), Blowup> {
         let t0 = Instant::now();
+        if let Some(pool) = self.sharing() {
+            self.shared_forces(&pool)?;
+            return Ok((t0.elapsed(), Duration::ZERO));
+        }
         self.pair_forces()?;
         let t1 = Instant::now();
         self.wall_forces()?;
@@ -342,8 +357,7 @@ where
     }
 
     fn compute_forces(&mut self) -> Result<(), Blowup> {
-        self.pair_forces()?;
-        self.wall_forces()
+        self.compute_forces_timed().map(|_| ())
     }
 
     /// Rebuilds the Verlet list and wall candidates now (normally done only

@@ -12,15 +12,19 @@
 //!    the crossing pairs of earlier ranges give them (those pairs come
 //!    first in list order), then walks its own block in order: a pair
 //!    inside the range is computed and added to both grains, a crossing
-//!    pair adds its stored response to its first grain.
+//!    pair adds its stored response to its first grain; then the range's
+//!    grains meet the walls, wall by wall, as the wall stage of one thread
+//!    adds them after every pair. A step so makes two passes over the pool,
+//!    not one for the pairs and another for the walls.
 
-use super::forces::{pair_response, worse};
+use super::forces::{pair_response, through_wall, wall_response, worse};
 use super::rest::Wake;
-use super::Simulation;
+use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::particles::Particles;
+use crate::walls::Wall;
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -100,10 +104,14 @@ impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
 where
     Dim<D>: Space<D>,
 {
-    /// Gravity and every pair on the thread pool; returns the largest
-    /// overlap fraction and its pair.
-    pub(super) fn pair_forces_shared(&mut self, pool: &rayon::ThreadPool) -> (f64, usize) {
+    /// Gravity, every pair and every wall contact on the thread pool, in
+    /// one pass: each share ends with its grains' wall contacts, in wall
+    /// order, as the wall stage of one thread adds them after every pair.
+    pub(super) fn shared_forces(&mut self, pool: &rayon::ThreadPool) -> Result<(), Blowup> {
         let n = self.particles.len();
+        if self.rest.is_some() {
+            self.wake.resize(n);
+        }
         let key = (self.neighbors.builds, n);
         if self.shares.planned_for != Some(key) {
             // More shares than threads: the pool balances shares of unequal
@@ -124,12 +132,25 @@ where
             shifts: &self.neighbors.shifts,
             parts: &self.shares.parts,
             rest: self.rest.map(|r| (&self.wake, r.speed * r.speed)),
+            walls: &self.walls,
+            wall_laws: &self.wall_laws,
+            candidates: &self.wall_contacts.candidates,
         };
-        let history = &mut self.neighbors.history;
-        let worst = pool.install(|| ctx.run(history, &mut force, &mut torque));
+        let out = Out {
+            history: &mut self.neighbors.history,
+            force: &mut force,
+            torque: &mut torque,
+            walls: &mut self.wall_contacts.history,
+        };
+        let (worst, walls) = pool.install(|| ctx.run(out));
         self.particles.force = force;
         self.particles.torque = torque;
-        worst
+        self.overlap_guard(worst)?;
+        self.max_overlap_seen = self.max_overlap_seen.max(walls.deepest);
+        match walls.through {
+            Some((w, i)) => Err(through_wall(&self.particles, i, w, self.time)),
+            None => Ok(()),
+        }
     }
 }
 
@@ -148,6 +169,57 @@ where
     /// With grains at rest: where to note whom a pair wakes, and the
     /// squared speed that wakes.
     rest: Option<(&'a Wake, f64)>,
+    walls: &'a [Wall<D>],
+    wall_laws: &'a [L],
+    /// Each wall's candidate grains, ascending.
+    candidates: &'a [Vec<u32>],
+}
+
+/// What the shares write, whole; `run` cuts it into one piece per share.
+struct Out<'a, const D: usize, H>
+where
+    Dim<D>: Space<D>,
+{
+    history: &'a mut [H],
+    force: &'a mut [Vector<D>],
+    torque: &'a mut [Angular<D>],
+    /// Each wall's contact histories, one per candidate.
+    walls: &'a mut [Vec<H>],
+}
+
+/// One share's piece of [`Out`]: its block of pairs, its grains, and for
+/// each wall its grains' contacts.
+struct Piece<'a, const D: usize, H>
+where
+    Dim<D>: Space<D>,
+{
+    history: &'a mut [H],
+    force: &'a mut [Vector<D>],
+    torque: &'a mut [Angular<D>],
+    walls: Vec<&'a mut [H]>,
+}
+
+/// The wall contacts of a step: the deepest overlap (a fraction of the
+/// radius) and the first grain found past its wall, as (wall, grain).
+#[derive(Debug, Clone, Copy, Default)]
+struct WallPass {
+    deepest: f64,
+    through: Option<(usize, usize)>,
+}
+
+impl WallPass {
+    /// Both shares' findings; of two grains past a wall, the one a single
+    /// thread meets first (walls in order, grains ascending).
+    fn join(self, other: WallPass) -> WallPass {
+        let through = match (self.through, other.through) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        WallPass {
+            deepest: self.deepest.max(other.deepest),
+            through,
+        }
+    }
 }
 
 /// Cuts `v` into consecutive pieces of the given ranges (empty if `v` is).
@@ -173,14 +245,9 @@ impl<const D: usize, L: ContactLaw<D>> Context<'_, D, L>
 where
     Dim<D>: Space<D>,
 {
-    fn run(
-        &self,
-        history: &mut [L::History],
-        force: &mut [Vector<D>],
-        torque: &mut [Angular<D>],
-    ) -> (f64, usize) {
+    fn run(&self, out: Out<'_, D, L::History>) -> ((f64, usize), WallPass) {
         let blocks = || self.parts.iter().map(|s| s.pairs.clone());
-        let mut hist = pieces(history, blocks());
+        let mut hist = pieces(out.history, blocks());
         // 1. The crossing pairs.
         let crossing: Vec<Crossing<D>> = hist
             .par_iter_mut()
@@ -189,18 +256,39 @@ where
             .collect();
         // 2. Each share's grains.
         let grains = || self.parts.iter().map(|s| s.grains.clone());
-        let forces = pieces(force, grains());
-        let torques = pieces(torque, grains());
+        let forces = pieces(out.force, grains());
+        let torques = pieces(out.torque, grains());
+        let mut walls: Vec<Vec<&mut [L::History]>> =
+            self.parts.iter().map(|_| Vec::new()).collect();
+        for (cands, h) in self.candidates.iter().zip(out.walls.iter_mut()) {
+            let ranges = grains().map(|g| candidates_in(cands, g));
+            for (mine, piece) in walls.iter_mut().zip(pieces(h, ranges)) {
+                mine.push(piece);
+            }
+        }
         let responses: Vec<&[Option<Response<D>>]> = crossing.iter().map(|c| &c.0[..]).collect();
-        let inner = hist
+        let (inner, wall_pass) = hist
             .into_par_iter()
             .zip(forces)
             .zip(torques)
+            .zip(walls)
             .zip(self.parts)
             .enumerate()
-            .map(|(t, (((h, f), tq), share))| self.own(t, share, h, f, tq, &responses))
-            .reduce(|| (0.0, usize::MAX), worse);
-        crossing.iter().map(|c| c.1).fold(inner, worse)
+            .map(|(t, ((((history, force), torque), walls), share))| {
+                let mut piece = Piece {
+                    history,
+                    force,
+                    torque,
+                    walls,
+                };
+                let worst = self.own(t, share, &mut piece, &responses);
+                (worst, self.wall_contacts(share, &mut piece))
+            })
+            .reduce(
+                || ((0.0, usize::MAX), WallPass::default()),
+                |a, b| (worse(a.0, b.0), a.1.join(b.1)),
+            );
+        (crossing.iter().map(|c| c.1).fold(inner, worse), wall_pass)
     }
 
     /// The response of pair `k` = `(i, j)`, as one thread computes it:
@@ -262,11 +350,10 @@ where
         &self,
         t: usize,
         share: &Share,
-        history: &mut [L::History],
-        force: &mut [Vector<D>],
-        torque: &mut [Angular<D>],
+        piece: &mut Piece<'_, D, L::History>,
         responses: &[&[Option<Response<D>>]],
     ) -> (f64, usize) {
+        let (history, force, torque) = (&mut *piece.history, &mut *piece.force, &mut *piece.torque);
         let p = self.p;
         let g0 = share.grains.start;
         for (x, f) in share.grains.clone().zip(force.iter_mut()) {
@@ -314,4 +401,39 @@ where
         }
         worst
     }
+
+    /// A share's grains against every wall, walls in order.
+    fn wall_contacts(&self, share: &Share, piece: &mut Piece<'_, D, L::History>) -> WallPass {
+        let mut pass = WallPass::default();
+        let g0 = share.grains.start;
+        for (w, wall) in self.walls.iter().enumerate() {
+            let cands =
+                &self.candidates[w][candidates_in(&self.candidates[w], share.grains.clone())];
+            for (&i, h) in cands.iter().zip(piece.walls[w].iter_mut()) {
+                let i = i as usize;
+                match wall_response(&self.wall_laws[w], wall, self.p, i, h, self.dt) {
+                    Err(()) => {
+                        pass.through = pass.through.or(Some((w, i)));
+                        break;
+                    }
+                    Ok(None) => {}
+                    Ok(Some((r, fraction))) => {
+                        pass.deepest = pass.deepest.max(fraction);
+                        piece.force[i - g0] += r.force;
+                        if L::ROTATES {
+                            piece.torque[i - g0] += r.torque_i;
+                        }
+                    }
+                }
+            }
+        }
+        pass
+    }
+}
+
+/// The positions in a wall's ascending candidates of the grains in `grains`.
+fn candidates_in(candidates: &[u32], grains: Range<usize>) -> Range<usize> {
+    let lo = candidates.partition_point(|&c| (c as usize) < grains.start);
+    let hi = candidates.partition_point(|&c| (c as usize) < grains.end);
+    lo..hi
 }
