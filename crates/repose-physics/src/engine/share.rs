@@ -175,29 +175,24 @@ where
     candidates: &'a [Vec<u32>],
 }
 
-/// What the shares write, whole; `run` cuts it into one piece per share.
-struct Out<'a, const D: usize, H>
+/// What the shares write: pair histories, forces, torques and wall
+/// contact histories, whole (`W` = one `Vec` per wall) or one share's piece
+/// (`W` = a slice per wall).
+struct Writes<'a, const D: usize, H, W>
 where
     Dim<D>: Space<D>,
 {
     history: &'a mut [H],
     force: &'a mut [Vector<D>],
     torque: &'a mut [Angular<D>],
-    /// Each wall's contact histories, one per candidate.
-    walls: &'a mut [Vec<H>],
+    walls: W,
 }
 
-/// One share's piece of [`Out`]: its block of pairs, its grains, and for
-/// each wall its grains' contacts.
-struct Piece<'a, const D: usize, H>
-where
-    Dim<D>: Space<D>,
-{
-    history: &'a mut [H],
-    force: &'a mut [Vector<D>],
-    torque: &'a mut [Angular<D>],
-    walls: Vec<&'a mut [H]>,
-}
+/// Everything the shares write; `run` cuts it into one piece per share.
+type Out<'a, const D: usize, H> = Writes<'a, D, H, &'a mut [Vec<H>]>;
+
+/// One share's block of pairs, its grains, and for each wall its grains' contacts.
+type Piece<'a, const D: usize, H> = Writes<'a, D, H, Vec<&'a mut [H]>>;
 
 /// The wall contacts of a step: the deepest overlap (a fraction of the
 /// radius) and the first grain found past its wall, as (wall, grain).
