@@ -3,7 +3,7 @@
 //! loses its connection when its time for headers runs out.
 
 use repose_api::server::{serve, Limits};
-use repose_store::Store;
+
 use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -46,11 +46,7 @@ async fn trickle(addr: std::net::SocketAddr) -> Duration {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_hundred_slow_clients_do_not_stop_health_answering() {
-    let dir = std::env::temp_dir().join(format!("repose-slow-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let store = Store::open(&format!("sqlite://{}", dir.join("slow.db").display()))
-        .await
-        .unwrap();
+    let store = repose_testkit::sqlite("repose-slow").await;
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let limits = Limits {

@@ -52,8 +52,7 @@ fn collision_example_prints_one_json_document_with_the_final_state() {
 #[test]
 #[cfg_attr(debug_assertions, ignore = "long: run with --release")]
 fn fill_release_writes_a_snapshot_a_trace_and_a_vtk_file() {
-    let dir = std::env::temp_dir().join(format!("repose-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = repose_testkit::scratch_dir("repose-cli");
     let (svg, csv, vtk) = (
         dir.join("pile.svg"),
         dir.join("ke.csv"),
@@ -213,8 +212,7 @@ fn shift_cell(cell: &str) -> (f64, f64) {
 #[test]
 #[cfg_attr(debug_assertions, ignore = "long: run with --release")]
 fn tradeoff_reports_the_shift_of_each_preset_from_its_own_samples() {
-    let dir = std::env::temp_dir().join(format!("repose-tradeoff-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = repose_testkit::scratch_dir("repose-tradeoff");
     let out = dir.join("sva.md");
     let args = |extra: &[&'static str]| {
         let mut a = vec![
@@ -304,8 +302,7 @@ fn tradeoff_reports_the_shift_of_each_preset_from_its_own_samples() {
 
 #[test]
 fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
-    let dir = std::env::temp_dir().join(format!("repose-cli-3d-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = repose_testkit::scratch_dir("repose-cli-3d");
     let scene = dir.join("drop.toml");
     std::fs::write(
         &scene,
@@ -373,8 +370,7 @@ fn a_free_run_in_3d_writes_spheres_with_their_height_to_vtk() {
 /// `repose serve` beyond loopback: refused without a token, started with one.
 #[test]
 fn serve_refuses_a_public_address_without_a_token() {
-    let dir = std::env::temp_dir().join(format!("repose-cli-serve-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = repose_testkit::scratch_dir("repose-cli-serve");
     let db = format!("sqlite://{}", dir.join("serve.db").display());
     let serve = |env: &[(&str, &str)], extra: &[&str]| {
         let mut c = Command::new(env!("CARGO_BIN_EXE_repose"));

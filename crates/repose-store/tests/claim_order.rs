@@ -1,7 +1,7 @@
 //! Jobs are claimed by sweep priority, then oldest sweep first, then in
 //! job order; a cancelled sweep's jobs are never claimed.
 
-use repose_store::{NewJob, NewSweep, Store};
+use repose_store::{NewJob, NewSweep};
 use serde_json::json;
 use std::time::Duration;
 
@@ -29,12 +29,7 @@ fn jobs(tag: &str, n: u64) -> Vec<NewJob> {
 
 #[tokio::test]
 async fn claims_follow_priority_then_age_then_job_order() {
-    let dir = std::env::temp_dir().join(format!("repose-order-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let _ = std::fs::remove_file(dir.join("order.db"));
-    let store = Store::open(&format!("sqlite://{}", dir.join("order.db").display()))
-        .await
-        .unwrap();
+    let store = repose_testkit::sqlite("repose-order").await;
     store
         .create_sweep(&sweep("old", 0), &jobs("old", 3), 3)
         .await

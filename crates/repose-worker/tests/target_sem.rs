@@ -2,7 +2,6 @@
 //! error of its metric reaches the target or the point has `max_samples`,
 //! run by real workers on a real SQLite store.
 
-use repose_store::Store;
 use repose_studies::SweepSpec;
 use repose_worker::{run_worker, WorkerConfig};
 use serde_json::json;
@@ -23,12 +22,7 @@ fn spec(extra: serde_json::Value) -> SweepSpec {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn points_get_samples_until_their_standard_error_reaches_the_target() {
-    let dir = std::env::temp_dir().join(format!("repose-sem-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let _ = std::fs::remove_file(dir.join("sem.db"));
-    let store = Store::open(&format!("sqlite://{}", dir.join("sem.db").display()))
-        .await
-        .unwrap();
+    let store = repose_testkit::sqlite("repose-sem").await;
     let (target, max) = (0.6, 24);
     let s = spec(json!({"target_sem": target, "max_samples": max}));
     let jobs: Vec<_> = s.expand().unwrap().iter().map(|j| j.to_new_job()).collect();
