@@ -4,12 +4,16 @@
 //! computed; on several, `share.rs` adds the same numbers in the same order.
 
 use super::{Blowup, Simulation};
+
 use crate::contact::{ContactLaw, Response, Touch};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
 use crate::particles::Particles;
 use crate::walls::Wall;
 use std::sync::Arc;
+
+/// A grain's angular quantities (spin, torque) in `D` dimensions.
+pub(super) type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
 
 impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
 where
@@ -107,29 +111,44 @@ where
         Ok(())
     }
 
-    /// Every grain touching a wall.
+    /// Every grain touching a wall, walls in order.
     pub(super) fn wall_forces(&mut self) -> Result<(), Blowup> {
-        let p = &mut self.particles;
+        let mut force = std::mem::take(&mut self.particles.force);
+        let mut torque = std::mem::take(&mut self.particles.torque);
+        let contacts = &mut self.wall_contacts;
+        let mut pass = WallPass::default();
         for (w, wall) in self.walls.iter().enumerate() {
+            let mine = (&contacts.candidates[w][..], &mut contacts.history[w][..]);
+            let out = (&mut force[..], &mut torque[..], 0);
             let law = &self.wall_laws[w];
-            let cands = &self.wall_contacts.candidates[w];
-            let history = &mut self.wall_contacts.history[w];
-            for (k, &i) in cands.iter().enumerate() {
-                let i = i as usize;
-                match wall_response(law, wall, p, i, &mut history[k], self.dt) {
-                    Err(()) => return Err(through_wall(p, i, w, self.time)),
-                    Ok(None) => {}
-                    Ok(Some((response, fraction))) => {
-                        self.max_overlap_seen = self.max_overlap_seen.max(fraction);
-                        p.force[i] += response.force;
-                        if L::ROTATES {
-                            p.torque[i] += response.torque_i;
-                        }
-                    }
-                }
+            pass = pass.join(wall_pass(
+                law,
+                (w, wall),
+                &self.particles,
+                mine,
+                out,
+                self.dt,
+            ));
+            if pass.through.is_some() {
+                break;
             }
         }
-        Ok(())
+        self.particles.force = force;
+        self.particles.torque = torque;
+        self.finish_walls(pass)
+    }
+
+    /// Notes the deepest wall overlap of a step; fails if a grain is past a wall.
+    pub(super) fn finish_walls(&mut self, pass: WallPass) -> Result<(), Blowup> {
+        self.max_overlap_seen = self.max_overlap_seen.max(pass.deepest);
+        match pass.through {
+            Some((w, i)) => Err(Blowup::ThroughWall {
+                id: self.particles.id[i],
+                wall: w,
+                time: self.time,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Normal force of every touching pair, for drawing force chains:
@@ -163,12 +182,73 @@ pub(super) fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
     }
 }
 
+/// The wall contacts of a step, or of one share of it: the deepest
+/// overlap (a fraction of the radius) and the first grain found past its
+/// wall, as (wall, grain).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct WallPass {
+    pub(super) deepest: f64,
+    pub(super) through: Option<(usize, usize)>,
+}
+
+impl WallPass {
+    /// Both findings; of two grains past a wall, the one a single thread
+    /// meets first (walls in order, grains ascending).
+    pub(super) fn join(self, other: WallPass) -> WallPass {
+        let through = match (self.through, other.through) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        WallPass {
+            deepest: self.deepest.max(other.deepest),
+            through,
+        }
+    }
+}
+
+/// The candidate grains of wall `w` (ascending, each with its contact
+/// history) against it: each contact's force and torque is added at
+/// `grain − first` of `out = (force, torque, first)`; the pass stops at
+/// the first grain found past the plane.
+#[inline(always)]
+pub(super) fn wall_pass<const D: usize, L: ContactLaw<D>>(
+    law: &L,
+    (w, wall): (usize, &Wall<D>),
+    p: &Particles<D>,
+    (candidates, history): (&[u32], &mut [L::History]),
+    (force, torque, first): (&mut [Vector<D>], &mut [Angular<D>], usize),
+    dt: f64,
+) -> WallPass
+where
+    Dim<D>: Space<D>,
+{
+    let mut pass = WallPass::default();
+    for (&i, h) in candidates.iter().zip(history) {
+        let i = i as usize;
+        match wall_response(law, wall, p, i, h, dt) {
+            Err(()) => {
+                pass.through = Some((w, i));
+                break;
+            }
+            Ok(None) => {}
+            Ok(Some((r, fraction))) => {
+                pass.deepest = pass.deepest.max(fraction);
+                force[i - first] += r.force;
+                if L::ROTATES {
+                    torque[i - first] += r.torque_i;
+                }
+            }
+        }
+    }
+    pass
+}
+
 /// What `wall` does to grain `i`, and its overlap as a fraction of the
 /// radius: `None` if the grain rests (its spring keeps what it held) or
 /// does not touch (its spring is reset), an error if its centre is past
 /// the plane.
 #[inline(always)]
-pub(super) fn wall_response<const D: usize, L: ContactLaw<D>>(
+fn wall_response<const D: usize, L: ContactLaw<D>>(
     law: &L,
     wall: &Wall<D>,
     p: &Particles<D>,
@@ -194,23 +274,6 @@ where
     let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
     let response = law.force(&touch, history, dt);
     Ok(Some((response, overlap / p.radius[i])))
-}
-
-/// The failure of grain `i` found past wall `w`.
-pub(super) fn through_wall<const D: usize>(
-    p: &Particles<D>,
-    i: usize,
-    w: usize,
-    time: f64,
-) -> Blowup
-where
-    Dim<D>: Space<D>,
-{
-    Blowup::ThroughWall {
-        id: p.id[i],
-        wall: w,
-        time,
-    }
 }
 
 /// The response of pair `(i, j)` at separation `r` and its overlap as a

@@ -17,7 +17,7 @@
 //!    adds them after every pair. A step so makes two passes over the pool,
 //!    not one for the pairs and another for the walls.
 
-use super::forces::{pair_response, through_wall, wall_response, worse};
+use super::forces::{pair_response, wall_pass, worse, Angular, WallPass};
 use super::rest::Wake;
 use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response};
@@ -27,8 +27,6 @@ use crate::particles::Particles;
 use crate::walls::Wall;
 use rayon::prelude::*;
 use std::ops::Range;
-
-type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
 
 /// A share's crossing responses and its largest overlap.
 type Crossing<const D: usize> = (Vec<Option<Response<D>>>, (f64, usize));
@@ -146,11 +144,7 @@ where
         self.particles.force = force;
         self.particles.torque = torque;
         self.overlap_guard(worst)?;
-        self.max_overlap_seen = self.max_overlap_seen.max(walls.deepest);
-        match walls.through {
-            Some((w, i)) => Err(through_wall(&self.particles, i, w, self.time)),
-            None => Ok(()),
-        }
+        self.finish_walls(walls)
     }
 }
 
@@ -177,7 +171,7 @@ where
 
 /// What the shares write: pair histories, forces, torques and wall
 /// contact histories, whole (`W` = one `Vec` per wall) or one share's piece
-/// (`W` = a slice per wall).
+/// (`W` = for each wall, the share's candidates and their histories).
 struct Writes<'a, const D: usize, H, W>
 where
     Dim<D>: Space<D>,
@@ -192,30 +186,10 @@ where
 type Out<'a, const D: usize, H> = Writes<'a, D, H, &'a mut [Vec<H>]>;
 
 /// One share's block of pairs, its grains, and for each wall its grains' contacts.
-type Piece<'a, const D: usize, H> = Writes<'a, D, H, Vec<&'a mut [H]>>;
+type Piece<'a, const D: usize, H> = Writes<'a, D, H, ShareWalls<'a, H>>;
 
-/// The wall contacts of a step: the deepest overlap (a fraction of the
-/// radius) and the first grain found past its wall, as (wall, grain).
-#[derive(Debug, Clone, Copy, Default)]
-struct WallPass {
-    deepest: f64,
-    through: Option<(usize, usize)>,
-}
-
-impl WallPass {
-    /// Both shares' findings; of two grains past a wall, the one a single
-    /// thread meets first (walls in order, grains ascending).
-    fn join(self, other: WallPass) -> WallPass {
-        let through = match (self.through, other.through) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
-        WallPass {
-            deepest: self.deepest.max(other.deepest),
-            through,
-        }
-    }
-}
+/// For each wall, a share's candidate grains and their contact histories.
+type ShareWalls<'a, H> = Vec<(&'a [u32], &'a mut [H])>;
 
 /// Cuts `v` into consecutive pieces of the given ranges (empty if `v` is).
 fn pieces<T>(mut v: &mut [T], ranges: impl Iterator<Item = Range<usize>>) -> Vec<&mut [T]> {
@@ -253,12 +227,13 @@ where
         let grains = || self.parts.iter().map(|s| s.grains.clone());
         let forces = pieces(out.force, grains());
         let torques = pieces(out.torque, grains());
-        let mut walls: Vec<Vec<&mut [L::History]>> =
+        let mut walls: Vec<ShareWalls<L::History>> =
             self.parts.iter().map(|_| Vec::new()).collect();
         for (cands, h) in self.candidates.iter().zip(out.walls.iter_mut()) {
-            let ranges = grains().map(|g| candidates_in(cands, g));
-            for (mine, piece) in walls.iter_mut().zip(pieces(h, ranges)) {
-                mine.push(piece);
+            let ranges: Vec<Range<usize>> = grains().map(|g| candidates_in(cands, g)).collect();
+            let histories = pieces(h, ranges.iter().cloned());
+            for ((mine, r), piece) in walls.iter_mut().zip(ranges).zip(histories) {
+                mine.push((&cands[r], piece));
             }
         }
         let responses: Vec<&[Option<Response<D>>]> = crossing.iter().map(|c| &c.0[..]).collect();
@@ -400,26 +375,20 @@ where
     /// A share's grains against every wall, walls in order.
     fn wall_contacts(&self, share: &Share, piece: &mut Piece<'_, D, L::History>) -> WallPass {
         let mut pass = WallPass::default();
-        let g0 = share.grains.start;
-        for (w, wall) in self.walls.iter().enumerate() {
-            let cands =
-                &self.candidates[w][candidates_in(&self.candidates[w], share.grains.clone())];
-            for (&i, h) in cands.iter().zip(piece.walls[w].iter_mut()) {
-                let i = i as usize;
-                match wall_response(&self.wall_laws[w], wall, self.p, i, h, self.dt) {
-                    Err(()) => {
-                        pass.through = pass.through.or(Some((w, i)));
-                        break;
-                    }
-                    Ok(None) => {}
-                    Ok(Some((r, fraction))) => {
-                        pass.deepest = pass.deepest.max(fraction);
-                        piece.force[i - g0] += r.force;
-                        if L::ROTATES {
-                            piece.torque[i - g0] += r.torque_i;
-                        }
-                    }
-                }
+        let first = share.grains.start;
+        for (w, (wall, (cands, history))) in self.walls.iter().zip(&mut piece.walls).enumerate() {
+            let out = (&mut *piece.force, &mut *piece.torque, first);
+            let law = &self.wall_laws[w];
+            pass = pass.join(wall_pass(
+                law,
+                (w, wall),
+                self.p,
+                (cands, history),
+                out,
+                self.dt,
+            ));
+            if pass.through.is_some() {
+                break;
             }
         }
         pass
