@@ -3,7 +3,6 @@
 //! loses its connection when its time for headers runs out.
 
 use repose_api::server::{serve, Limits};
-
 use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;

@@ -308,7 +308,7 @@ fn bed() -> Engine {
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "long: run with --release")]
-fn threads_share_the_pair_loop_without_changing_a_bit() {
+fn threads_share_the_pair_and_wall_contacts_without_changing_a_bit() {
     let mut one = bed();
     let mut two = bed();
     two.set_threads(2).unwrap();
