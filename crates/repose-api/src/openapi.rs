@@ -91,7 +91,7 @@ mod tests {
             .iter()
             .filter_map(|v| v.as_str())
             .collect();
-        assert_eq!(names, repose_physics::protocols::names());
+        assert_eq!(names, repose_physics::registry::protocol_names());
         assert!(doc["paths"]["/api/sweeps/{id}/series"]["get"]["parameters"]
             .as_array()
             .unwrap()

@@ -9,8 +9,8 @@ use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::Json;
-use repose_physics::protocols;
 use repose_physics::Preset;
+use repose_physics::{protocols, registry};
 use repose_store::{Store, SweepInfo};
 use repose_studies::compare::Comparison;
 use repose_studies::data::{StudyData, SweepData};
@@ -61,7 +61,7 @@ pub struct ProtocolList {
 }
 
 fn describe(p: &dyn protocols::Protocol) -> ProtocolInfo {
-    let model = repose_physics::models::find(p.default_model(p.dimensions()[0]));
+    let model = registry::find_model(p.default_model(p.dimensions()[0]));
     let decls = model
         .map(|m| m.sections())
         .unwrap_or_default()
@@ -108,7 +108,7 @@ fn describe(p: &dyn protocols::Protocol) -> ProtocolInfo {
 #[utoipa::path(get, path = "/api/protocols", tag = "registry", responses((status = 200, body = ProtocolList)))]
 pub async fn protocols() -> Json<ProtocolList> {
     Json(ProtocolList {
-        protocols: protocols::all().iter().map(|p| describe(*p)).collect(),
+        protocols: registry::protocols().iter().map(|p| describe(*p)).collect(),
     })
 }
 

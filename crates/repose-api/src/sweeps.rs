@@ -228,7 +228,7 @@ fn csv_response(name: &str, text: String) -> Response {
 
 /// The metrics a sweep's protocol declares, in its order.
 pub(crate) fn declared(protocol: &str) -> Vec<String> {
-    repose_physics::protocols::find(protocol)
+    repose_physics::registry::find_protocol(protocol)
         .map(|p| p.metrics().iter().map(|m| m.name.to_string()).collect())
         .unwrap_or_default()
 }

@@ -183,7 +183,7 @@ async fn protocols_are_described_from_the_registry() {
         .iter()
         .map(|p| p["name"].as_str().unwrap())
         .collect();
-    assert_eq!(names, repose_physics::protocols::names());
+    assert_eq!(names, repose_physics::registry::protocol_names());
     let tilt = protocols.iter().find(|p| p["name"] == "tilt").unwrap();
     let metrics: Vec<&str> = tilt["metrics"]
         .as_array()

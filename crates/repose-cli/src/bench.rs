@@ -6,8 +6,8 @@
 //! the ratio.
 
 use anyhow::Context;
+use repose_engine::integrate::Scheme;
 use repose_physics::bench::{throughput, PhaseThroughput};
-use repose_physics::integrate::Scheme;
 use repose_physics::Scene;
 use std::collections::HashMap;
 use std::path::PathBuf;

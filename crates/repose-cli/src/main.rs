@@ -27,7 +27,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use repose_physics::report::Phase;
-use repose_physics::{protocols, Observer, Progress, RunReport, Scene};
+use repose_physics::{registry, Observer, Progress, RunReport, Scene};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -245,7 +245,7 @@ fn summary(r: &RunReport) -> String {
     if let Some(reason) = r.outcome.reason() {
         lines.push(("reason".into(), reason));
     }
-    let declared = protocols::find(&r.protocol)
+    let declared = registry::find_protocol(&r.protocol)
         .map(|p| p.metrics())
         .unwrap_or_default();
     for m in declared {

@@ -99,8 +99,8 @@ pub fn snapshot_svg(r: &RunReport) -> String {
 
 /// Kinetic energy per grain against iteration, in the model's units.
 pub fn trace_csv(r: &RunReport) -> String {
-    let units = repose_physics::models::find(&r.model)
-        .map_or(repose_physics::engine::Units::CGS, |m| m.units());
+    let units = repose_physics::registry::find_model(&r.model)
+        .map_or(repose_engine::simulation::Units::CGS, |m| m.units());
     let mut s = format!(
         "iteration,time_s,kinetic_energy_per_grain_{},max_speed_{},phase\n",
         units.energy,

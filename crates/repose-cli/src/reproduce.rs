@@ -6,7 +6,7 @@
 use crate::service::{get_json, init_logging, runtime, spawn_workers, LeaseArgs, DEFAULT_DATABASE};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
-use repose_physics::{protocols, Preset, ENGINE};
+use repose_physics::{registry, Preset, ENGINE};
 use repose_store::Store;
 use repose_studies::data::{StudyData, SweepData};
 use repose_studies::papers::{self, Paper};
@@ -341,9 +341,8 @@ fn command(args: &ReproduceArgs, paper: &Paper) -> String {
 fn preset_settings(paper: &Paper, preset: Preset) -> String {
     (paper.sweeps)()
         .first()
-        .and_then(|s| protocols::find(s.protocol))
-        .map(|p| preset.describe(p))
-        .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
+        .and_then(|s| registry::find_protocol(s.protocol))
+        .map(|p| p.preset_line(preset))
         .unwrap_or_default()
 }
 
@@ -351,7 +350,7 @@ fn preset_settings(paper: &Paper, preset: Preset) -> String {
 fn metric_labels(paper: &Paper) -> Vec<(String, String)> {
     let mut out: Vec<(String, String)> = Vec::new();
     for s in (paper.sweeps)() {
-        for m in protocols::find(s.protocol)
+        for m in registry::find_protocol(s.protocol)
             .map(|p| p.metrics())
             .unwrap_or_default()
         {

@@ -418,7 +418,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
 /// Each point's sample counts and the two leading metrics of the protocol.
 fn points_table(points: &Value, protocol: &str) -> String {
     use std::fmt::Write;
-    let metrics: Vec<(&str, String)> = repose_physics::protocols::find(protocol)
+    let metrics: Vec<(&str, String)> = repose_physics::registry::find_protocol(protocol)
         .map(|p| p.metrics())
         .unwrap_or_default()
         .iter()

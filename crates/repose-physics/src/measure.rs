@@ -2,8 +2,8 @@
 //! its slope by the three methods of Lee & Herrmann (section 3), in any
 //! dimension (the vertical axis is the last one: y in 2D, z in 3D).
 
-use crate::dim::Vector;
 pub use crate::report::Profile;
+use repose_engine::dim::Vector;
 use serde::{Deserialize, Serialize};
 
 /// The slope of one pile by each method, as angles in degrees (positive

@@ -38,16 +38,6 @@ impl Preset {
             Preset::Paper => "paper",
         }
     }
-
-    /// One line for help texts: the settings it stands for in a protocol.
-    pub fn describe(self, protocol: &dyn crate::protocols::Protocol) -> String {
-        let parts: Vec<String> = protocol
-            .preset(self)
-            .iter()
-            .map(|(k, v)| format!("{k} = {v}"))
-            .collect();
-        format!("{}: {}", self.name(), parts.join(", "))
-    }
 }
 
 impl fmt::Display for Preset {

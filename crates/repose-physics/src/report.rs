@@ -6,10 +6,10 @@
 //! the page to draw, and the protocol's own details. Reports stored by
 //! version 0.1 of the engine read back in this shape through [`upgrade`].
 
-use crate::engine::StageCounters;
-use crate::particles::Grain;
 use crate::scene::{RngKind, Scene};
-use crate::walls::WallSpec;
+use repose_engine::particles::Grain;
+use repose_engine::simulation::StageCounters;
+use repose_engine::walls::WallSpec;
 use serde::{Serialize, Serializer};
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
@@ -323,7 +323,8 @@ pub fn upgrade(report: Value) -> Value {
         }
         o.insert("physics".into(), Value::Object(physics));
     }
-    r.insert("model".into(), json!(crate::models::lee_herrmann::NAME));
+    // Version 0.1 had one model, Lee & Herrmann's, under this name.
+    r.insert("model".into(), json!("lee_herrmann"));
     r.insert("dimension".into(), json!(2));
     r.insert("metrics".into(), Value::Object(metrics));
     r.insert("theory".into(), Value::Array(quantities));

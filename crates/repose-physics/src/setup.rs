@@ -5,10 +5,9 @@
 //! from a distribution crate) so that the same seed gives the same grains
 //! whatever versions of those crates a build resolves.
 
-use crate::dim::Vector;
-use crate::models::lee_herrmann::GrainSpec;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
+use repose_engine::dim::Vector;
 use serde::{Deserialize, Serialize};
 
 /// The scene's random stream; its state serialises, so a saved run goes
@@ -33,16 +32,17 @@ impl Stream {
         (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
     }
 
-    /// A radius from the Gaussian of `spec`, drawn again while outside
-    /// `[radius_min, radius_max]` (resampled, not clamped).
-    pub fn radius(&mut self, spec: &GrainSpec) -> f64 {
-        if spec.radius_sd == 0.0 {
-            return spec.radius_mean;
+    /// A draw from the Gaussian of `mean` and `sd`, drawn again while
+    /// outside `[min, max]` (resampled, not clamped); `mean` itself when
+    /// `sd` is zero.
+    pub fn cut_normal(&mut self, mean: f64, sd: f64, min: f64, max: f64) -> f64 {
+        if sd == 0.0 {
+            return mean;
         }
         loop {
-            let r = spec.radius_mean + spec.radius_sd * self.normal();
-            if r >= spec.radius_min && r <= spec.radius_max {
-                return r;
+            let x = mean + sd * self.normal();
+            if x >= min && x <= max {
+                return x;
             }
         }
     }
@@ -123,10 +123,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn radii_follow_the_cut_gaussian() {
-        let spec = GrainSpec::default();
+    fn draws_follow_the_cut_gaussian() {
         let mut s = Stream::new(7);
-        let r: Vec<f64> = (0..20_000).map(|_| s.radius(&spec)).collect();
+        let r: Vec<f64> = (0..20_000)
+            .map(|_| s.cut_normal(0.1, 0.02, 0.07, 0.13))
+            .collect();
         assert!(r.iter().all(|&x| (0.07..=0.13).contains(&x)));
         let mean = r.iter().sum::<f64>() / r.len() as f64;
         assert!((mean - 0.1).abs() < 1e-3, "{mean}");
@@ -137,9 +138,10 @@ mod tests {
 
     #[test]
     fn placement_never_overlaps_and_stays_in_the_column() {
-        let spec = GrainSpec::default();
         let mut s = Stream::new(3);
-        let radii: Vec<f64> = (0..400).map(|_| s.radius(&spec)).collect();
+        let radii: Vec<f64> = (0..400)
+            .map(|_| s.cut_normal(0.1, 0.02, 0.07, 0.13))
+            .collect();
         let pos = random_column(&mut s, &radii, 4.0, 0.35);
         for i in 0..pos.len() {
             assert!(pos[i].x >= radii[i] && pos[i].x <= 4.0 - radii[i]);

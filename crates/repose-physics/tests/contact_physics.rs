@@ -5,14 +5,14 @@
 mod common;
 
 use common::rk4_step;
-use repose_physics::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
-use repose_physics::dim::Vector;
-use repose_physics::engine::Simulation;
-use repose_physics::integrate::{Gear5, Integrator, VelocityVerlet};
-use repose_physics::particles::Particles;
+use repose_engine::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
+use repose_engine::dim::Vector;
+use repose_engine::integrate::{Gear5, Integrator, VelocityVerlet};
+use repose_engine::particles::Particles;
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 use repose_physics::setup::{sphere_mass, Stream};
 use repose_physics::theory::hertz_contact_time;
-use repose_physics::walls::Wall;
 use repose_physics::{run, Quiet, Scene};
 
 /// Restitution of a head-on collision from an independent integration of

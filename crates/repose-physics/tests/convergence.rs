@@ -11,13 +11,13 @@
 mod common;
 
 use common::rk4_step;
-use repose_physics::contact::{Frictionless, HertzDamped, Pairwise};
-use repose_physics::dim::Vector;
-use repose_physics::engine::Simulation;
-use repose_physics::integrate::{Gear5, Integrator, VelocityVerlet};
-use repose_physics::particles::Particles;
+use repose_engine::contact::{Frictionless, HertzDamped, Pairwise};
+use repose_engine::dim::Vector;
+use repose_engine::integrate::{Gear5, Integrator, VelocityVerlet};
+use repose_engine::particles::Particles;
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 use repose_physics::setup::sphere_mass;
-use repose_physics::walls::Wall;
 
 const K_WALL: f64 = 2e6;
 const G: f64 = 981.0;

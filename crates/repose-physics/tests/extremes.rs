@@ -3,9 +3,9 @@
 //! validation, naming the field). None may panic or report a number from a
 //! run that went wrong.
 
-use repose_physics::contact::ContactLaw;
-use repose_physics::engine::{Blowup, Simulation};
-use repose_physics::integrate::Integrator;
+use repose_engine::contact::ContactLaw;
+use repose_engine::integrate::Integrator;
+use repose_engine::simulation::{Blowup, Simulation};
 use repose_physics::models::{with_engine, EngineJob, Laws};
 use repose_physics::protocols::pile::{closed_box, BoxSpec, PileSpec};
 use repose_physics::protocols::tilt::TiltSpec;
@@ -310,7 +310,7 @@ fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
         kinetic: 2.0,
         limit: 1.0,
         time: 0.5,
-        units: repose_physics::engine::Units::CGS,
+        units: repose_engine::simulation::Units::CGS,
     }
     .to_string();
     assert!(message.contains("energy blow-up"), "{message}");

@@ -5,15 +5,15 @@
 //! moving grain reaches them. Small, softened scenes: a paper-stiff
 //! heap costs 10¹¹ particle-steps.
 
-use repose_physics::contact::{Epsd2, NoCohesion};
-use repose_physics::dim::Vector;
-use repose_physics::engine::{Blowup, RestRule, Simulation};
-use repose_physics::integrate::VelocityVerlet;
+use repose_engine::contact::{Epsd2, NoCohesion};
+use repose_engine::dim::Vector;
+use repose_engine::integrate::VelocityVerlet;
+use repose_engine::particles::Particles;
+use repose_engine::simulation::{Blowup, RestRule, Simulation};
+use repose_engine::walls::Wall;
 use repose_physics::models::elekes_parteli::{self, law, Law, Parts};
-use repose_physics::particles::Particles;
 use repose_physics::protocols::heap::{SideView, FOOTPRINT_HEIGHT};
 use repose_physics::report::Profile;
-use repose_physics::walls::Wall;
 use repose_physics::{run, Outcome, Quiet, RunReport, Scene};
 
 /// A small heap of 1 mm glass beads softened to κ = 10⁵ (Y ≈ 2.5 MPa).

@@ -5,8 +5,8 @@
 //! version of each protocol's example scene), and the tables of
 //! docs/scene.md name exactly what the registries hold.
 
-use repose_physics::models;
-use repose_physics::protocols::{self, Quiet};
+use repose_physics::protocols::Quiet;
+use repose_physics::registry;
 use repose_physics::{run, Scene};
 use std::collections::BTreeSet;
 
@@ -36,7 +36,7 @@ fn small_scene(protocol: &str) -> (&'static str, Vec<&'static str>) {
 #[test]
 fn every_metric_a_protocol_records_is_declared() {
     let examples = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/");
-    for protocol in protocols::all() {
+    for protocol in registry::protocols() {
         let name = protocol.name();
         let (file, overrides) = small_scene(name);
         let text = std::fs::read_to_string(format!("{examples}{file}")).unwrap();
@@ -76,7 +76,7 @@ fn the_metric_table_of_the_scene_docs_lists_every_protocols_metrics() {
         .nth(1)
         .and_then(|s| s.split("\n## ").next())
         .expect("docs/scene.md has a Metrics section");
-    for protocol in protocols::all() {
+    for protocol in registry::protocols() {
         let name = protocol.name();
         let row = table
             .lines()
@@ -85,7 +85,7 @@ fn the_metric_table_of_the_scene_docs_lists_every_protocols_metrics() {
         let mut cells = row.split('|').skip(2);
         let listed: BTreeSet<&str> = quoted(cells.next().unwrap_or(""))
             .into_iter()
-            .filter(|n| !protocols::all().iter().any(|p| p.name() == *n))
+            .filter(|n| !registry::protocols().iter().any(|p| p.name() == *n))
             .collect();
         let declared: BTreeSet<&str> = protocol.metrics().iter().map(|m| m.name).collect();
         assert_eq!(listed, declared, "docs/scene.md's row of `{name}`");
@@ -104,13 +104,13 @@ fn key_row(key: &str) -> &'static str {
 fn the_scene_docs_name_every_registered_protocol_and_model() {
     let protocol_cell = key_row("protocol").rsplit('|').nth(1).unwrap();
     let listed = quoted(protocol_cell);
-    let registered: BTreeSet<&str> = protocols::names().into_iter().collect();
+    let registered: BTreeSet<&str> = registry::protocol_names().into_iter().collect();
     assert_eq!(listed, registered, "the `protocol` row of docs/scene.md");
     let model_cell = key_row("model").rsplit('|').nth(1).unwrap();
     let listed: BTreeSet<&str> = quoted(model_cell)
         .into_iter()
         .filter(|n| !registered.contains(n))
         .collect();
-    let models: BTreeSet<&str> = models::names().into_iter().collect();
+    let models: BTreeSet<&str> = registry::model_names().into_iter().collect();
     assert_eq!(listed, models, "the `model` row of docs/scene.md");
 }

@@ -2,15 +2,15 @@
 //! grains and a law that pulls across a gap, run through the engine and
 //! checked against mechanics worked out by hand.
 
-use repose_physics::contact::{
+use repose_engine::contact::{
     CohesionLaw, ContactLaw, CundallStrack, HertzDamped, NoCohesion, NoRolling, Pairwise, Touch,
 };
-use repose_physics::dim::{Dim, Space, Vector};
-use repose_physics::engine::Simulation;
-use repose_physics::integrate::{Gear5, Integrator, VelocityVerlet};
-use repose_physics::particles::Particles;
+use repose_engine::dim::{Dim, Space, Vector};
+use repose_engine::integrate::{Gear5, Integrator, VelocityVerlet};
+use repose_engine::particles::Particles;
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 use repose_physics::setup::sphere_mass;
-use repose_physics::walls::Wall;
 
 /// Hertz contacts with Coulomb friction whose torques turn the grains.
 type Rolling = Pairwise<HertzDamped<true>, CundallStrack<true>, NoRolling, NoCohesion, true>;

@@ -8,16 +8,16 @@
 mod common;
 
 use common::rk4_step;
-use repose_physics::contact::{
+use repose_engine::contact::{
     CohesionLaw, ContactLaw, Epsd2, NoCohesion, NoRolling, RollingLaw, VanDerWaals,
 };
-use repose_physics::dim::Vector;
-use repose_physics::engine::Simulation;
-use repose_physics::integrate::{Gear5, Integrator, VelocityVerlet};
+use repose_engine::dim::Vector;
+use repose_engine::integrate::{Gear5, Integrator, VelocityVerlet};
+use repose_engine::particles::Particles;
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 use repose_physics::models::elekes_parteli::{self, law, Kind, Law, Parts};
 use repose_physics::models::Build;
-use repose_physics::particles::Particles;
-use repose_physics::walls::Wall;
 use repose_physics::Scene;
 
 const D: f64 = 1e-3;

@@ -10,7 +10,7 @@
 use repose_physics::doc;
 use repose_physics::preset::Preset;
 use repose_physics::scene::{FieldError, Scene, SceneError};
-use repose_physics::{protocols, ENGINE};
+use repose_physics::{registry, ENGINE};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use sha2::{Digest, Sha256};
@@ -159,20 +159,20 @@ impl SweepSpec {
     pub fn target_metric(&self) -> Option<String> {
         self.target_sem?;
         self.target_metric.clone().or_else(|| {
-            protocols::find(&self.protocol)
+            registry::find_protocol(&self.protocol)
                 .and_then(|p| p.metrics().first().map(|m| m.name.to_string()))
         })
     }
 
     /// Checks everything but the scenes themselves.
     fn check(&self) -> Result<(), SceneError> {
-        if protocols::find(&self.protocol).is_none() {
+        if registry::find_protocol(&self.protocol).is_none() {
             return Err(field_error(
                 "protocol",
                 format!(
                     "unknown protocol `{}`: expected one of {}",
                     self.protocol,
-                    protocols::names().join(", ")
+                    registry::protocol_names().join(", ")
                 ),
             ));
         }
@@ -237,7 +237,7 @@ impl SweepSpec {
             return Err(field_error("target_sem", "must be a positive number"));
         }
         let metric = self.target_metric().unwrap_or_default();
-        let known = protocols::find(&self.protocol)
+        let known = registry::find_protocol(&self.protocol)
             .map(|p| {
                 p.metrics()
                     .iter()

@@ -20,7 +20,7 @@
 //! document lacks it, so a renamed type or field fails the crate's tests
 //! instead of leaving a stale contract.
 
-use repose_physics::{models, protocols, Preset};
+use repose_physics::{registry, Preset};
 use repose_store::Backend;
 use repose_studies::papers::PAPERS;
 use repose_studies::spec::MAX_JOBS;
@@ -53,11 +53,11 @@ fn push_new<T: PartialEq>(list: &mut Vec<T>, item: T) {
 impl Registry {
     fn gather() -> Registry {
         let mut r = Registry {
-            protocols: protocols::names(),
+            protocols: registry::protocol_names(),
             presets: Preset::ALL.iter().map(|p| p.name()).collect(),
             metrics: Vec::new(),
             phases: Vec::new(),
-            models: models::names(),
+            models: registry::model_names(),
             dimensions: Vec::new(),
             papers: PAPERS.iter().map(|p| p.key).collect(),
             study_sweeps: Vec::new(),
@@ -65,7 +65,7 @@ impl Registry {
             docs: crate::doc_names(),
             web: crate::WEB.iter().map(|(name, _, _)| *name).collect(),
         };
-        for p in protocols::all() {
+        for p in registry::protocols() {
             for m in p.metrics() {
                 push_new(&mut r.metrics, m.name);
                 push_new(&mut r.phases, m.phase);
@@ -370,7 +370,7 @@ fn needs() -> Vec<(&'static str, &'static [&'static str], Value)> {
 /// fields that go with `target_sem`.
 fn sweep_rules(doc: &mut Value) {
     let mut rules = Vec::new();
-    for p in protocols::all() {
+    for p in registry::protocols() {
         let when = json!({ "properties": { "protocol": { "const": p.name() } }, "required": ["protocol"] });
         let mut metrics: Vec<Value> = p.metrics().iter().map(|m| json!(m.name)).collect();
         let then = if metrics.is_empty() {

@@ -7,17 +7,17 @@
 //! comparison is of cost per particle-step, not of angles.
 
 use super::{timed, PhaseThroughput};
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::engine::Simulation;
-use crate::integrate::Integrator;
 use crate::models::elekes_parteli::Grains;
 use crate::models::{with_engine, EngineJob, Laws};
-use crate::particles::Particles;
 use crate::protocols::pour::{draw_diameter, Placer};
 use crate::scene::{Scene, SceneError};
 use crate::setup::Stream;
-use crate::walls::Wall;
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::Particles;
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 
 /// The peer run's grains and material as a scene (a free run, whose one
 /// listed grain the benchmark replaces by its own pour).

@@ -5,14 +5,14 @@
 
 pub mod heap;
 
-use crate::contact::ContactLaw;
-use crate::dim::{Dim, Space};
-use crate::engine::{Simulation, StageCounters};
-use crate::integrate::Integrator;
 use crate::models::{with_engine, EngineJob, Laws};
 use crate::protocols::pile::{self, Pile, PileSpec, FILL};
 use crate::protocols::Quiet;
 use crate::scene::{Scene, SceneError};
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::{Dim, Space};
+use repose_engine::integrate::Integrator;
+use repose_engine::simulation::{Simulation, StageCounters};
 use serde::Serialize;
 use std::time::Instant;
 

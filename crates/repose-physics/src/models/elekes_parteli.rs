@@ -6,14 +6,14 @@
 //! paper leaves open is pinned in `docs/model.md`.
 
 use super::{assemble, select, Build, EngineJob, Laws, Model};
-use crate::contact::{
+use crate::doc::Doc;
+use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
+use repose_engine::contact::{
     restitution, Cap, ContactLaw, Epsd2, Limits, MindlinSpring, NoCohesion, NoRolling, Pairwise,
     VanDerWaals, ViscoelasticHertz,
 };
-use crate::doc::Doc;
-use crate::engine::Units;
-use crate::integrate::{Gear5, Scheme, VelocityVerlet};
-use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
+use repose_engine::integrate::{Gear5, Scheme, VelocityVerlet};
+use repose_engine::simulation::Units;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -599,7 +599,7 @@ pub fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, 
     let m = material(scene)?.1;
     let (pair, plate) = parts(scene)?;
     let run = |job: J| -> J::Output {
-        fn go<J: EngineJob<3>, L: ContactLaw<3>, I: crate::integrate::Integrator<3>>(
+        fn go<J: EngineJob<3>, L: ContactLaw<3>, I: repose_engine::integrate::Integrator<3>>(
             job: J,
             pair: L,
             wall: L,

@@ -5,13 +5,13 @@
 //! plane, and spheres in space.
 
 use super::{assemble, select, Build, EngineJob, Laws, Model};
-use crate::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
-use crate::dim::{Dim, Space};
 use crate::doc::Doc;
-use crate::engine::Units;
-use crate::integrate::{Gear5, Scheme, VelocityVerlet};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
-use crate::setup::sphere_mass;
+use crate::setup::{sphere_mass, Stream};
+use repose_engine::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
+use repose_engine::dim::{Dim, Space};
+use repose_engine::integrate::{Gear5, Scheme, VelocityVerlet};
+use repose_engine::simulation::Units;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -59,6 +59,16 @@ impl GrainSpec {
     /// The largest radius a draw can give.
     pub fn largest(&self) -> f64 {
         self.radius_max.max(self.radius_mean)
+    }
+
+    /// A radius from the cut Gaussian, drawn from `stream`.
+    pub fn draw_radius(&self, stream: &mut Stream) -> f64 {
+        stream.cut_normal(
+            self.radius_mean,
+            self.radius_sd,
+            self.radius_min,
+            self.radius_max,
+        )
     }
 }
 

@@ -4,22 +4,22 @@
 //! (Lee & Herrmann's `[grains]`, `[contact]` and `[wall_contact]`), their
 //! defaults, the time scale of a contact, and the choice of compiled engine:
 //! which integrator and which contact-law components a scene's options ask
-//! for. That choice is one flat list per model ([`select!`]): each option is
+//! for. That choice is one flat list per model (`select!`): each option is
 //! one line naming the types it can be, and every combination is compiled,
 //! so a scene pays only for the physics it switches on.
 //!
-//! Adding a model is its own module plus one line in [`MODELS`] (and one in
-//! the [`Models`] impl of each dimension it has).
+//! Adding a model is its own module plus one line in the registry's
+//! `MODELS` (and one in the [`Models`] impl of each dimension it has).
 
 pub mod elekes_parteli;
 pub mod lee_herrmann;
 
-use crate::contact::{ContactLaw, Frictionless, NoCohesion, NoRolling, Pairwise};
-use crate::dim::{Dim, Space};
 use crate::doc::Doc;
-use crate::engine::Units;
-use crate::integrate::Integrator;
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};
+use repose_engine::contact::{ContactLaw, Frictionless, NoCohesion, NoRolling, Pairwise};
+use repose_engine::dim::{Dim, Space};
+use repose_engine::integrate::Integrator;
+use repose_engine::simulation::Units;
 use std::collections::BTreeMap;
 
 /// A contact-law component built from a model's parameters `P` for one
@@ -95,19 +95,6 @@ pub trait Model: Sync {
     fn sort_every(&self) -> u64 {
         0
     }
-}
-
-/// Every contact model, by name. Registering a model is one line here.
-pub static MODELS: &[&dyn Model] = &[&lee_herrmann::LeeHerrmann, &elekes_parteli::ElekesParteli];
-
-/// The model of this name.
-pub fn find(name: &str) -> Option<&'static dyn Model> {
-    MODELS.iter().copied().find(|m| m.name() == name)
-}
-
-/// The registered names.
-pub fn names() -> Vec<&'static str> {
-    MODELS.iter().map(|m| m.name()).collect()
 }
 
 /// The contact laws of a run: one between grains, one between a grain and a wall.

@@ -6,15 +6,15 @@
 use super::pile::{self, calm, BoxSpec, Equilibrium, Pile, PileSpec, StillWindow};
 use super::runner::{Findings, Stop};
 use super::{Metric, Observer, Protocol};
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::integrate::Integrator;
 use crate::measure::Stats;
 use crate::models::{self, EngineJob, Laws};
-use crate::particles::Particles;
 use crate::report::{Band, Curve, Outcome, Phase, Quantity, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
 use crate::setup::{sphere_mass, Stream};
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::Particles;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
@@ -148,7 +148,7 @@ fn floor_layer(scene: &Scene, spec: &PileSpec) -> Particles<2> {
     let mut particles = Particles::<2>::default();
     let mut x = 0.0;
     loop {
-        let r = stream.radius(&spec.grains);
+        let r = spec.grains.draw_radius(&mut stream);
         let centre = x + r * 1.001;
         if centre + r > spec.cell.width {
             break;
@@ -279,7 +279,7 @@ fn feed<L: ContactLaw<2>, I: Integrator<2>>(
             time: sim.time,
             angle,
         });
-        let r = stream.radius(&pile.spec.grains);
+        let r = pile.spec.grains.draw_radius(&mut stream);
         let p = &sim.particles;
         // The upper-left corner: a random spot within one mean diameter of
         // the left wall, just above the grains there. Dropping every grain

@@ -4,17 +4,17 @@
 
 use super::runner::{extent, Findings, Runner};
 use super::{Metric, Observer, Protocol};
-use crate::contact::ContactLaw;
-use crate::dim::{Dim, Space, Vector};
-use crate::engine::Simulation;
-use crate::integrate::Integrator;
 use crate::models::{self, elekes_parteli, lee_herrmann, EngineJob, Laws, Models};
-use crate::particles::{vector_from, Particles};
 use crate::preset::Preset;
 use crate::report::{Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};
 use crate::setup::sphere_mass;
-use crate::walls::Wall;
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::{Dim, Space, Vector};
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::{vector_from, Particles};
+use repose_engine::simulation::Simulation;
+use repose_engine::walls::Wall;
 use serde_json::Value;
 
 pub struct FreeRun;

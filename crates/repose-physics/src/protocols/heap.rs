@@ -5,18 +5,18 @@
 use super::pour::{self, Placer, PourJob, Region, RestSpec, Scales};
 use super::runner::{Findings, Runner, Stop};
 use super::{Metric, Observer, Protocol};
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::engine::{Outlet, Simulation};
-use crate::integrate::Integrator;
 use crate::measure::Profile;
 use crate::models::elekes_parteli::Grains;
 use crate::models::{self, EngineJob, Laws};
-use crate::particles::Particles;
 use crate::report::{Curve, Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
 use crate::setup::Stream;
-use crate::walls::Wall;
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::Particles;
+use repose_engine::simulation::{Outlet, Simulation};
+use repose_engine::walls::Wall;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 

@@ -6,8 +6,8 @@
 //! the settings of each fidelity preset, and its metrics (name, unit, label,
 //! description and the phase that produces them) — and it runs a scene into
 //! a [`RunReport`]. The store, the API, the exports and the results page
-//! learn protocols and metrics from [`PROTOCOLS`]; registering a protocol is
-//! its module plus one line there.
+//! learn protocols and metrics from the registry ([`crate::registry`]);
+//! registering a protocol is its module plus one line there.
 
 pub mod fill_release;
 pub mod flux;
@@ -64,6 +64,15 @@ pub trait Protocol: Sync {
     fn metrics(&self) -> &'static [Metric];
     /// The scene values a fidelity preset sets, as dotted keys.
     fn preset(&self, preset: Preset) -> Vec<(&'static str, Value)>;
+    /// What a preset sets here, as one line (`key = value, …`).
+    fn preset_line(&self, preset: Preset) -> String {
+        let parts: Vec<String> = self
+            .preset(preset)
+            .iter()
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect();
+        parts.join(", ")
+    }
     /// Whether it draws grains from the model's distribution (rather than
     /// only running the listed ones).
     fn draws_grains(&self) -> bool {
@@ -81,39 +90,6 @@ pub trait Protocol: Sync {
     }
     /// Runs a validated, resolved scene.
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError>;
-}
-
-/// Every protocol, by name. Registering a protocol is one line here.
-pub static PROTOCOLS: &[&dyn Protocol] = &[
-    &fill_release::FillRelease,
-    &tilt::Tilt,
-    &flux::Flux,
-    &free_run::FreeRun,
-    &heap::Heap,
-    &packing::Packing,
-];
-
-/// All registered protocols.
-pub fn all() -> &'static [&'static dyn Protocol] {
-    PROTOCOLS
-}
-
-/// The protocol of this name.
-pub fn find(name: &str) -> Option<&'static dyn Protocol> {
-    PROTOCOLS.iter().copied().find(|p| p.name() == name)
-}
-
-/// The registered names.
-pub fn names() -> Vec<&'static str> {
-    PROTOCOLS.iter().map(|p| p.name()).collect()
-}
-
-/// The metric of this name in any protocol.
-pub fn metric(name: &str) -> Option<&'static Metric> {
-    PROTOCOLS
-        .iter()
-        .flat_map(|p| p.metrics())
-        .find(|m| m.name == name)
 }
 
 /// Runs one sample of the scene.

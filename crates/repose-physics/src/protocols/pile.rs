@@ -4,20 +4,20 @@
 
 use super::runner::{Findings, Runner, Stop};
 use super::Observer;
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::engine::{Outlet, Simulation};
-use crate::integrate::Integrator;
 use crate::measure::{Profile, SlopeAngles};
 use crate::models::lee_herrmann::GrainSpec;
 use crate::models::{EngineJob, Laws};
-use crate::particles::Particles;
 use crate::preset::Preset;
 use crate::report::{Outcome, Phase, Quantity, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS, MAX_PACKING};
 use crate::setup::{random_column, sphere_mass, Stream};
 use crate::theory;
-use crate::walls::{Limit, Wall};
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::Particles;
+use repose_engine::simulation::{Outlet, Simulation};
+use repose_engine::walls::{Limit, Wall};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;
@@ -298,7 +298,7 @@ pub fn box_grains(scene: &Scene, spec: &PileSpec, stream: &mut Stream) -> Partic
     }
     let mut particles = Particles::<2>::default();
     let n = spec.cell.grain_count(scene);
-    let radii: Vec<f64> = (0..n).map(|_| stream.radius(&spec.grains)).collect();
+    let radii: Vec<f64> = (0..n).map(|_| spec.grains.draw_radius(stream)).collect();
     let pos = random_column(
         stream,
         &radii,

@@ -5,15 +5,15 @@
 
 use super::runner::{Runner, Stop};
 use super::Observer;
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::engine::{RestRule, Simulation};
-use crate::integrate::{Integrator, Scheme};
 use crate::models::elekes_parteli::Grains;
 use crate::preset::Preset;
 use crate::report::Phase;
 use crate::scene::{Checks, Scene, SceneError, Section};
 use crate::setup::Stream;
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::{Integrator, Scheme};
+use repose_engine::simulation::{RestRule, Simulation};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;

@@ -46,7 +46,7 @@ impl Header {
     pub(super) fn new(variant: &str, protocol: &str, seed: u64) -> Header {
         Header {
             format: FORMAT,
-            engine: crate::ENGINE.to_string(),
+            engine: crate::report::ENGINE.to_string(),
             variant: variant.to_string(),
             protocol: protocol.to_string(),
             seed,

@@ -3,17 +3,17 @@
 //! outcomes, and assemble the report.
 
 use super::resume::{self, Checkpoint, Header, Saved, SavedPoint};
-use crate::contact::ContactLaw;
-use crate::dim::{Dim, Space, Vector};
-use crate::engine::{Blowup, Simulation};
-use crate::integrate::Integrator;
-use crate::particles::Particles;
 use crate::report::{
     ContactForce, Curve, FinalState, GrainCounts, Options, Outcome, Phase, Profile, Quantity,
     RunReport, TracePoint, ENGINE,
 };
 use crate::scene::Scene;
-use crate::walls::{Wall, WallSpec};
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::{Dim, Space, Vector};
+use repose_engine::integrate::Integrator;
+use repose_engine::particles::Particles;
+use repose_engine::simulation::{Blowup, Simulation};
+use repose_engine::walls::{Wall, WallSpec};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
@@ -228,7 +228,7 @@ where
         bytes: &[u8],
         phases: &[Phase],
     ) -> Result<P, String> {
-        let saved: Saved<crate::engine::StateOf<D, L, I>, P> =
+        let saved: Saved<repose_engine::simulation::StateOf<D, L, I>, P> =
             resume::decode(bytes, &self.header())?;
         let trace = saved
             .trace

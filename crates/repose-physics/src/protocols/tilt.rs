@@ -6,12 +6,12 @@ use super::fill_release::REPOSE_METRICS;
 use super::pile::{self, AfterRelease, BoxSpec, Equilibrium, Pile, PileSpec, ReleaseJob};
 use super::runner::{Findings, Stop};
 use super::{Metric, Observer, Protocol};
-use crate::contact::ContactLaw;
-use crate::dim::Vector;
-use crate::integrate::Integrator;
 use crate::models;
 use crate::report::{Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
+use repose_engine::contact::ContactLaw;
+use repose_engine::dim::Vector;
+use repose_engine::integrate::Integrator;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 

@@ -24,13 +24,11 @@ pub(crate) mod checks;
 
 pub use checks::{Checks, FieldError, SceneError};
 
-use crate::doc::{self, Doc};
-use crate::integrate::Scheme;
-use crate::models::{self, Model};
-use crate::particles::Grain;
+use crate::doc::Doc;
 use crate::preset::Preset;
-use crate::protocols::{self, Protocol};
-use crate::walls::WallSpec;
+use repose_engine::integrate::Scheme;
+use repose_engine::particles::Grain;
+use repose_engine::walls::WallSpec;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -82,35 +80,35 @@ pub struct Scene {
 /// The core of a scene document, as written.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Core {
+pub(crate) struct Core {
     #[allow(dead_code)] // read before the core is parsed
-    protocol: String,
-    #[serde(default)]
-    #[allow(dead_code)] // read before the core is parsed
-    model: Option<String>,
+    pub(crate) protocol: String,
     #[serde(default)]
     #[allow(dead_code)] // read before the core is parsed
-    dimension: Option<usize>,
+    pub(crate) model: Option<String>,
     #[serde(default)]
-    preset: Option<Preset>,
+    #[allow(dead_code)] // read before the core is parsed
+    pub(crate) dimension: Option<usize>,
     #[serde(default)]
-    seed: u64,
+    pub(crate) preset: Option<Preset>,
     #[serde(default)]
-    rng: RngKind,
+    pub(crate) seed: u64,
     #[serde(default)]
-    gravity: Option<Vec<f64>>,
+    pub(crate) rng: RngKind,
     #[serde(default)]
-    numerics: Numerics,
+    pub(crate) gravity: Option<Vec<f64>>,
     #[serde(default)]
-    particles: Vec<Grain>,
+    pub(crate) numerics: Numerics,
     #[serde(default)]
-    walls: Vec<WallSpec>,
+    pub(crate) particles: Vec<Grain>,
     #[serde(default)]
-    duration: Option<f64>,
+    pub(crate) walls: Vec<WallSpec>,
+    #[serde(default)]
+    pub(crate) duration: Option<f64>,
 }
 
 /// The keys of the core; every other top-level key is a section.
-const CORE_KEYS: [&str; 11] = [
+pub(crate) const CORE_KEYS: [&str; 11] = [
     "protocol",
     "model",
     "dimension",
@@ -184,8 +182,8 @@ pub trait Section: Serialize + DeserializeOwned + Default {
 pub struct SectionDecl {
     pub key: &'static str,
     pub about: &'static str,
-    normalize: fn(&str, Value) -> Result<Value, SceneError>,
-    check: fn(&Scene, &mut Checks),
+    pub(crate) normalize: fn(&str, Value) -> Result<Value, SceneError>,
+    pub(crate) check: fn(&Scene, &mut Checks),
 }
 
 impl SectionDecl {
@@ -231,94 +229,6 @@ pub const MAX_GRAINS: usize = 1_000_000;
 pub const MAX_DT_FACTOR: f64 = 0.5;
 
 impl Scene {
-    /// Parses a TOML document — or a JSON one (text starting with `{`) —
-    /// applies `key=value` overrides (dotted keys, TOML values; a bare word
-    /// is taken as a string) and validates.
-    pub fn from_toml(text: &str, overrides: &[String]) -> Result<Scene, SceneError> {
-        let mut d = doc::parse(text)?;
-        for o in overrides {
-            let (key, value) = doc::parse_assignment(o)?;
-            doc::set(&mut d, &key, value)?;
-        }
-        Scene::from_doc(d)
-    }
-
-    /// Reads a scene from JSON (a document as results store it) and validates.
-    pub fn from_json(value: Value) -> Result<Scene, SceneError> {
-        match doc::drop_nulls(value) {
-            Value::Object(d) => Scene::from_doc(d),
-            _ => Err(SceneError::single(
-                "(document)",
-                "a scene is a table of keys",
-            )),
-        }
-    }
-
-    /// Reads a scene stored by this or an earlier version of the engine.
-    /// Earlier versions wrote every protocol's section into every scene;
-    /// those of other protocols are dropped.
-    pub fn from_stored(value: Value) -> Result<Scene, SceneError> {
-        Scene::from_json(upgrade_stored(value))
-    }
-
-    /// Builds a scene from a document: protocol, model and dimension first,
-    /// then the preset's settings and the model's defaults where the
-    /// document is silent, then the core and each section; validates.
-    pub fn from_doc(mut d: Doc) -> Result<Scene, SceneError> {
-        let protocol = protocol_of(&d)?;
-        let dimension = dimension_of(&d, protocol)?;
-        let model = model_of(&d, protocol, dimension)?;
-        if let Some(name) = d.get("preset") {
-            let preset: Preset = name
-                .as_str()
-                .ok_or_else(|| "a preset is named by a string".to_string())
-                .and_then(str::parse)
-                .map_err(|m| SceneError::single("preset", m))?;
-            for (key, value) in protocol.preset(preset) {
-                if !doc::has(&d, key) {
-                    doc::set(&mut d, key, value)?;
-                }
-            }
-        }
-        let defaults = model.defaults(dimension, &d);
-        doc::merge_defaults(&mut d, &defaults);
-        let mut core_doc = Doc::new();
-        for key in CORE_KEYS {
-            if let Some(v) = d.remove(key) {
-                core_doc.insert(key.to_string(), v);
-            }
-        }
-        let core: Core = serde_path_to_error::deserialize(Value::Object(core_doc))
-            .map_err(|e| checks::path_error(e.path().to_string(), e.inner().to_string()))?;
-        let sections = sections_of(d, protocol, model)?;
-        let scene = Scene {
-            protocol: protocol.name().to_string(),
-            model: model.name().to_string(),
-            dimension,
-            preset: core.preset,
-            seed: core.seed,
-            rng: core.rng,
-            gravity: core.gravity.unwrap_or_default(),
-            numerics: core.numerics,
-            particles: core.particles,
-            walls: core.walls,
-            duration: core.duration,
-            sections,
-        };
-        scene.validate()?;
-        Ok(scene)
-    }
-
-    /// The protocol this scene names.
-    pub fn protocol(&self) -> Result<&'static dyn Protocol, SceneError> {
-        protocols::find(&self.protocol).ok_or_else(|| unknown_protocol(&self.protocol))
-    }
-
-    /// The contact model this scene names.
-    pub fn model(&self) -> Result<&'static dyn Model, SceneError> {
-        models::find(&self.model).ok_or_else(|| unknown_model(&self.model))
-    }
-
     /// One section, typed.
     pub fn section<T: Section>(&self) -> Result<T, SceneError> {
         let value = self
@@ -335,24 +245,8 @@ impl Scene {
         self.sections.insert(T::KEY.to_string(), value);
     }
 
-    /// Checks every field; returns all problems at once.
-    pub fn validate(&self) -> Result<(), SceneError> {
-        let protocol = self.protocol()?;
-        let model = self.model()?;
-        let mut c = Checks::default();
-        self.check_core(&mut c);
-        for decl in model.sections().iter().chain(&protocol.sections()) {
-            (decl.check)(self, &mut c);
-        }
-        model.check(self, &mut c);
-        protocol.check(self, &mut c);
-        if c.is_empty() {
-            self.check_time_step(&mut c);
-        }
-        c.into_result()
-    }
-
-    fn check_core(&self, c: &mut Checks) {
+    /// Checks the core: gravity, numerics and the listed grains and walls.
+    pub(crate) fn check_core(&self, c: &mut Checks) {
         let d = self.dimension;
         if self.gravity.len() != d {
             c.fail(
@@ -440,387 +334,5 @@ impl Scene {
                 }
             }
         }
-    }
-
-    fn check_time_step(&self, c: &mut Checks) {
-        let step = self.time_step();
-        if !(step.is_finite() && step > 0.0) {
-            c.fail(
-                "numerics.dt",
-                "the derived time step is not a positive finite number",
-            );
-            return;
-        }
-        if let Some(dt) = self.numerics.dt {
-            let t_c = self.contact_time();
-            if dt > MAX_DT_FACTOR * t_c {
-                c.fail(
-                    "numerics.dt",
-                    format!(
-                        "{dt:.3e} s is above the stability limit: the stiffest contact lasts \
-                         t_c = {t_c:.3e} s at the reference speed, so a step may be at most \
-                         {:.3e} s (t_c/50 = {:.3e} s by default)",
-                        MAX_DT_FACTOR * t_c,
-                        t_c / 50.0
-                    ),
-                );
-            }
-        }
-    }
-
-    /// The time step this scene runs with: the explicit one, or
-    /// `dt_factor` times the contact time of the stiffest pair.
-    pub fn time_step(&self) -> f64 {
-        if let Some(dt) = self.numerics.dt {
-            return dt;
-        }
-        self.numerics.dt_factor * self.contact_time()
-    }
-
-    /// The speed at which the contact time is taken: the reference speed,
-    /// or the fastest impact the protocol makes happen if that is higher.
-    pub fn impact_speed(&self) -> f64 {
-        let v = self.numerics.reference_speed;
-        match self.protocol().ok().and_then(|p| p.impact_speed(self)) {
-            Some(fast) if fast > v => fast,
-            _ => v,
-        }
-    }
-
-    /// Shortest contact duration of this scene's grains at the impact
-    /// speed, as the model defines it.
-    pub fn contact_time(&self) -> f64 {
-        match self.model() {
-            Ok(m) => m.contact_time(self),
-            Err(_) => f64::NAN,
-        }
-    }
-
-    /// The scene with every derived value written out.
-    pub fn resolved(&self) -> Scene {
-        let mut s = self.clone();
-        if let Ok(m) = self.model() {
-            m.resolve(&mut s);
-        }
-        if let Ok(p) = self.protocol() {
-            p.resolve(&mut s);
-        }
-        s.numerics.dt = Some(self.time_step());
-        s
-    }
-}
-
-/// The registered protocol a document names.
-fn protocol_of(d: &Doc) -> Result<&'static dyn Protocol, SceneError> {
-    match d.get("protocol") {
-        None => Err(SceneError::single(
-            "protocol",
-            format!("missing: name one of {}", protocols::names().join(", ")),
-        )),
-        Some(Value::String(name)) => protocols::find(name).ok_or_else(|| unknown_protocol(name)),
-        Some(other) => Err(SceneError::single(
-            "protocol",
-            format!("is {}, not the name of a protocol", doc::kind(other)),
-        )),
-    }
-}
-
-fn unknown_protocol(name: &str) -> SceneError {
-    SceneError::single(
-        "protocol",
-        format!(
-            "unknown protocol `{name}`: expected one of {}",
-            protocols::names().join(", ")
-        ),
-    )
-}
-
-fn unknown_model(name: &str) -> SceneError {
-    SceneError::single(
-        "model",
-        format!(
-            "unknown model `{name}`: expected one of {}",
-            models::names().join(", ")
-        ),
-    )
-}
-
-/// The dimension a document asks for, or its protocol's first.
-fn dimension_of(d: &Doc, protocol: &dyn Protocol) -> Result<usize, SceneError> {
-    let allowed = protocol.dimensions();
-    let Some(v) = d.get("dimension") else {
-        return Ok(allowed[0]);
-    };
-    let dim = v.as_u64().map(|x| x as usize);
-    match dim {
-        Some(x) if allowed.contains(&x) => Ok(x),
-        _ => Err(SceneError::single(
-            "dimension",
-            format!(
-                "protocol {} runs in {} dimensions, not {v}",
-                protocol.name(),
-                allowed
-                    .iter()
-                    .map(|x| x.to_string())
-                    .collect::<Vec<_>>()
-                    .join(" or ")
-            ),
-        )),
-    }
-}
-
-/// The model a document asks for, or its protocol's default for the dimension.
-fn model_of(
-    d: &Doc,
-    protocol: &dyn Protocol,
-    dimension: usize,
-) -> Result<&'static dyn Model, SceneError> {
-    let name = match d.get("model") {
-        None => protocol.default_model(dimension),
-        Some(Value::String(s)) => s.as_str(),
-        Some(other) => {
-            return Err(SceneError::single(
-                "model",
-                format!("is {}, not the name of a model", doc::kind(other)),
-            ))
-        }
-    };
-    let model = models::find(name).ok_or_else(|| unknown_model(name))?;
-    if !protocol.models().contains(&model.name()) {
-        return Err(SceneError::single(
-            "model",
-            format!(
-                "protocol {} runs with {}, not {name}",
-                protocol.name(),
-                protocol.models().join(" or ")
-            ),
-        ));
-    }
-    if !model.dimensions().contains(&dimension) {
-        return Err(SceneError::single(
-            "model",
-            format!("model {name} has no {dimension}D form"),
-        ));
-    }
-    Ok(model)
-}
-
-/// Splits the non-core keys into the sections the protocol and the model
-/// declare, each normalised with its defaults; anything else is refused.
-fn sections_of(
-    mut rest: Doc,
-    protocol: &dyn Protocol,
-    model: &dyn Model,
-) -> Result<BTreeMap<String, Value>, SceneError> {
-    let decls: Vec<SectionDecl> = model
-        .sections()
-        .into_iter()
-        .chain(protocol.sections())
-        .collect();
-    let mut errors = Checks::default();
-    let mut out = BTreeMap::new();
-    for decl in &decls {
-        let value = rest
-            .remove(decl.key)
-            .unwrap_or_else(|| Value::Object(Doc::new()));
-        match (decl.normalize)(decl.key, value) {
-            Ok(v) => {
-                out.insert(decl.key.to_string(), v);
-            }
-            Err(e) => errors.extend(e),
-        }
-    }
-    for key in rest.keys() {
-        let known: Vec<&str> = decls.iter().map(|d| d.key).collect();
-        let owner = protocols::all()
-            .iter()
-            .find(|p| p.sections().iter().any(|s| s.key == key))
-            .map(|p| format!(" (it belongs to protocol {})", p.name()))
-            .unwrap_or_default();
-        errors.fail(
-            key,
-            format!(
-                "unknown field `{key}`{owner}: protocol {} with model {} takes the sections {}",
-                protocol.name(),
-                model.name(),
-                known.join(", ")
-            ),
-        );
-    }
-    errors.into_result().map(|()| out)
-}
-
-/// Documents stored by version 0.1 carried every protocol's section in every
-/// scene and no model or dimension; keep only what the protocol reads.
-fn upgrade_stored(value: Value) -> Value {
-    let Value::Object(mut d) = value else {
-        return value;
-    };
-    if d.contains_key("model") {
-        return Value::Object(d);
-    }
-    if let Some(protocol) = d
-        .get("protocol")
-        .and_then(Value::as_str)
-        .and_then(protocols::find)
-    {
-        let own: Vec<&str> = protocol.sections().iter().map(|s| s.key).collect();
-        d.retain(|key, _| {
-            CORE_KEYS.contains(&key.as_str())
-                || own.contains(&key.as_str())
-                || !protocols::all()
-                    .iter()
-                    .any(|p| p.sections().iter().any(|s| s.key == key))
-        });
-    }
-    Value::Object(d)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::models::lee_herrmann::{ContactSpec, WallContactSpec};
-    use crate::protocols::pile::BoxSpec;
-
-    fn fields(err: SceneError) -> Vec<String> {
-        err.errors.into_iter().map(|e| e.field).collect()
-    }
-
-    #[test]
-    fn smallest_scene_takes_the_papers_defaults() {
-        let s = Scene::from_toml("protocol = \"fill_release\"", &[]).unwrap();
-        assert_eq!((s.model.as_str(), s.dimension), ("lee_herrmann", 2));
-        let contact: ContactSpec = s.section().unwrap();
-        assert_eq!(contact.k_n, 1e6);
-        assert_eq!(contact.gamma_s(), 5.0);
-        let r = s.resolved();
-        let wall: WallContactSpec = r.section().unwrap();
-        assert_eq!((wall.k_n, wall.mu), (2e6, Some(0.2)));
-        assert_eq!(r.section::<BoxSpec>().unwrap().grains, Some(400));
-        assert_eq!(r.gravity, vec![0.0, -981.0]);
-        // Hertz contact of two smallest grains (or grain and wall) at 1 cm/s is ~7e-4 s
-        let dt = r.numerics.dt.unwrap();
-        assert!(dt > 1.0e-5 && dt < 2.0e-5, "dt = {dt}");
-    }
-
-    #[test]
-    fn overrides_set_nested_values() {
-        let s = Scene::from_toml(
-            "protocol = \"tilt\"",
-            &[
-                "contact.mu=0.3".into(),
-                "numerics.integrator=verlet".into(),
-                "box.width=2".into(),
-            ],
-        )
-        .unwrap();
-        assert_eq!(s.section::<ContactSpec>().unwrap().mu, 0.3);
-        assert_eq!(s.numerics.integrator, Scheme::Verlet);
-        assert_eq!(s.section::<BoxSpec>().unwrap().width, 2.0);
-    }
-
-    #[test]
-    fn bad_values_are_refused_with_the_field_named() {
-        let cases: &[(&str, &str)] = &[
-            ("contact.mu=-0.1", "contact.mu"),
-            ("grains.radius_mean=0", "grains.radius_mean"),
-            ("grains.radius_min=-0.01", "grains.radius_min"),
-            ("box.width=0.1", "box.width"),
-            ("box.grains=100000", "box.grains"),
-            ("contact.k_n=nan", "contact.k_n"),
-            ("numerics.dt_factor=0", "numerics.dt_factor"),
-            ("numerics.dt_factor=-1", "numerics.dt_factor"),
-            ("grains.radius_sd=10", "grains.radius_sd"),
-            ("gravity=[0, 0, -981]", "gravity"),
-            ("dimension=3", "dimension"),
-            ("model=none", "model"),
-        ];
-        for (o, field) in cases {
-            let err =
-                Scene::from_toml("protocol = \"fill_release\"", &[o.to_string()]).unwrap_err();
-            assert!(
-                fields(err.clone()).contains(&field.to_string()),
-                "{o}: {err}"
-            );
-        }
-    }
-
-    #[test]
-    fn unknown_keys_and_wrong_types_name_the_field() {
-        let err =
-            Scene::from_toml("protocol = \"fill_release\"\n[contact]\nmuu = 0.2", &[]).unwrap_err();
-        assert_eq!(err.errors[0].field, "contact.muu");
-        assert!(err.errors[0].message.contains("unknown field"), "{err}");
-        let err = Scene::from_toml("protocol = \"fill_release\"\n[contact]\nmu = \"high\"", &[])
-            .unwrap_err();
-        assert_eq!(err.errors[0].field, "contact.mu");
-        let err = Scene::from_toml("protocol = \"sideways\"", &[]).unwrap_err();
-        assert_eq!(err.errors[0].field, "protocol");
-        let err = Scene::from_toml("protocol = \"fill_release\"\ncolour = 3", &[]).unwrap_err();
-        assert_eq!(err.errors[0].field, "colour");
-    }
-
-    #[test]
-    fn a_section_of_another_protocol_is_refused_naming_its_owner() {
-        let err =
-            Scene::from_toml("protocol = \"fill_release\"\n[tilt]\nrate = 5.0", &[]).unwrap_err();
-        assert_eq!(err.errors[0].field, "tilt");
-        assert!(err.errors[0].message.contains("protocol tilt"), "{err}");
-    }
-
-    #[test]
-    fn a_resolved_scene_stored_as_json_reads_back_the_same() {
-        let s = Scene::from_toml("protocol = \"tilt\"\nseed = 7", &[])
-            .unwrap()
-            .resolved();
-        let text = serde_json::to_string_pretty(&s).unwrap();
-        let back = Scene::from_toml(&text, &[]).unwrap();
-        assert_eq!(back, s);
-        let changed = Scene::from_toml(&text, &["contact.mu=0.3".into()]).unwrap();
-        assert_eq!(changed.section::<ContactSpec>().unwrap().mu, 0.3);
-    }
-
-    #[test]
-    fn scenes_stored_by_version_0_1_still_read() {
-        // 0.1 wrote every protocol's section into every resolved scene.
-        let stored = serde_json::json!({
-            "protocol": "fill_release", "seed": 3, "rng": "chacha8",
-            "gravity": [0.0, -981.0],
-            "box": {"width": 2.0, "height": 2.0, "aspect": null, "grains": 100,
-                    "grains_per_area": 25.0, "placement_fraction": 0.35},
-            "tilt": {"rate": 10.0, "onset_displacement": 0.5, "onset_fraction": 0.02, "max_angle": 45.0},
-            "flux": {"v_cut": 0.1, "insertions": 300, "max_wait": 2.0, "discard_fraction": 0.5},
-            "contact": {"mu": 0.3}
-        });
-        assert!(Scene::from_json(stored.clone()).is_err());
-        let s = Scene::from_stored(stored).unwrap();
-        assert_eq!(s.seed, 3);
-        assert_eq!(s.section::<BoxSpec>().unwrap().grains, Some(100));
-        assert!(!s.sections.contains_key("tilt"));
-    }
-
-    #[test]
-    fn a_free_run_takes_grains_and_walls_in_either_dimension() {
-        let err = Scene::from_toml("protocol = \"free_run\"", &[]).unwrap_err();
-        let f = fields(err);
-        assert!(f.contains(&"particles".to_string()) && f.contains(&"duration".to_string()));
-        let three = "protocol = \"free_run\"\ndimension = 3\nduration = 0.01\n\
-                     [[particles]]\nposition = [0.0, 0.0, 0.2]\nradius = 0.1\n\
-                     [[walls]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n";
-        // In 3D a free run takes Elekes & Parteli's spheres (SI), or Lee &
-        // Herrmann's law (CGS) when named.
-        let s = Scene::from_toml(three, &[]).unwrap();
-        assert_eq!(s.model, "elekes_parteli");
-        assert_eq!(s.gravity, vec![0.0, 0.0, -9.81]);
-        let s = Scene::from_toml(three, &["model=\"lee_herrmann\"".into()]).unwrap();
-        assert_eq!(s.gravity, vec![0.0, 0.0, -981.0]);
-        let err = Scene::from_toml(
-            three,
-            &["particles=[{position = [0.0, 0.2], radius = 0.1}]".into()],
-        )
-        .unwrap_err();
-        assert_eq!(err.errors[0].field, "particles[0].position", "{err}");
-        let err = Scene::from_toml(three, &["dimension=4".into()]).unwrap_err();
-        assert_eq!(err.errors[0].field, "dimension");
     }
 }

@@ -15,7 +15,7 @@ mod tally;
 use crate::chart::Chart;
 use rayon::prelude::*;
 use repose_physics::measure::Stats;
-use repose_physics::{protocols, Preset, Scene, SceneError, ENGINE};
+use repose_physics::{registry, Preset, Scene, SceneError, ENGINE};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -161,16 +161,13 @@ impl Case {
 
 /// One case per fidelity preset, described by what it sets in `protocol`.
 pub(crate) fn preset_cases(protocol: &str) -> Vec<Case> {
-    let found = protocols::find(protocol);
+    let found = registry::find_protocol(protocol);
     Preset::ALL
         .into_iter()
         .map(|p| Case {
             group: Group::Presets,
             name: p.name().into(),
-            what: found
-                .map(|f| p.describe(f))
-                .and_then(|d| d.split_once(": ").map(|x| x.1.to_string()))
-                .unwrap_or_default(),
+            what: found.map(|f| f.preset_line(p)).unwrap_or_default(),
             overrides: vec![format!("preset={}", p.name())],
         })
         .collect()

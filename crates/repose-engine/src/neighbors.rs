@@ -18,8 +18,8 @@
 //! shift: the pair's separation is `x_i − x_j − shift`.
 
 use crate::dim::{Dim, Space, Vector};
-use crate::engine::boundary::Periodic;
 use crate::particles::Particles;
+use crate::simulation::boundary::Periodic;
 use serde::{Deserialize, Serialize};
 
 /// Verlet pair list with one contact-history slot per pair.
