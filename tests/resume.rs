@@ -6,7 +6,7 @@
 
 use repose_physics::{Quiet, Scene};
 use repose_store::Store;
-use repose_studies::SweepSpec;
+use repose_sweeps::SweepSpec;
 use serde_json::{json, Value};
 use std::io::Read;
 use std::process::{Child, Command, Stdio};

@@ -4,7 +4,7 @@
 //! the server is unreachable; elsewhere they skip with a message.
 
 use repose_store::Store;
-use repose_studies::{JobSpec, SweepSpec};
+use repose_sweeps::{JobSpec, SweepSpec};
 use serde_json::{json, Value};
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use repose_store::{Created, ScratchDatabase, Store};
-use repose_studies::{JobSpec, SweepSpec};
+use repose_sweeps::{JobSpec, SweepSpec};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};

@@ -9,7 +9,7 @@ use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use repose_store::{Aggregate, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo};
-use repose_studies::SweepSpec;
+use repose_sweeps::SweepSpec;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 

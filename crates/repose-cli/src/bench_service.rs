@@ -11,7 +11,7 @@
 use anyhow::Context;
 use repose_physics::{run, Quiet, Scene};
 use repose_store::{now_ms, Backend, NewJob, ResultRecord, ScratchDatabase, Store};
-use repose_studies::SweepSpec;
+use repose_sweeps::SweepSpec;
 use repose_worker::{record, run_worker, WorkerConfig};
 use serde_json::json;
 use std::process::ExitCode;

@@ -1,9 +1,8 @@
 //! # repose-studies
 //!
-//! The papers' studies as data, and the reports written from them.
+//! The papers' studies as data, and the reports written from them. A
+//! study's sweeps are `repose-sweeps` specifications.
 //!
-//! * [`spec`] — a sweep: protocol, base scene, axes, samples, fidelity; its
-//!   expansion into one validated, resolved scene per job.
 //! * [`papers`] — each paper's study sweeps and figures (which metric
 //!   against which axis, theory curves, the values the paper quotes) and the
 //!   comparison of its stated results with ours.
@@ -26,10 +25,7 @@ pub mod fit;
 pub mod fitted;
 pub mod papers;
 pub mod reproduction;
-pub mod spec;
-pub mod topup;
 pub mod tradeoff;
 
 pub use figure::FigureData;
 pub use papers::{Paper, PAPERS};
-pub use spec::{JobSpec, SweepSpec};

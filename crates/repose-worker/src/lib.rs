@@ -217,7 +217,7 @@ async fn work(
     if ending == Ending::Completed {
         // A sweep that chases a standard error may want more samples now.
         let max_attempts = repose_store::DEFAULT_MAX_ATTEMPTS;
-        match repose_studies::topup::top_up(store, &job.sweep_id, max_attempts).await {
+        match repose_sweeps::topup::top_up(store, &job.sweep_id, max_attempts).await {
             Ok(0) => {}
             Ok(n) => tracing::info!(sweep = %job.sweep_id, "{n} samples added for target_sem"),
             Err(e) => tracing::warn!(sweep = %job.sweep_id, "could not add samples: {e}"),

@@ -2,7 +2,7 @@
 //! error of its metric reaches the target or the point has `max_samples`,
 //! run by real workers on a real SQLite store.
 
-use repose_studies::SweepSpec;
+use repose_sweeps::SweepSpec;
 use repose_worker::{run_worker, WorkerConfig};
 use serde_json::json;
 

@@ -23,7 +23,7 @@
 use repose_physics::{registry, Preset};
 use repose_store::Backend;
 use repose_studies::papers::PAPERS;
-use repose_studies::spec::MAX_JOBS;
+use repose_sweeps::spec::MAX_JOBS;
 use serde_json::{json, Value};
 
 /// Names the registries accept.
