@@ -14,7 +14,8 @@ use repose_physics::{protocols, registry};
 use repose_store::{Store, SweepInfo};
 use repose_studies::compare::Comparison;
 use repose_studies::data::{StudyData, SweepData};
-use repose_studies::papers::{self, Paper, PaperSummary, Queue};
+use repose_studies::paper::{Paper, PaperSummary, Queue};
+use repose_studies::papers;
 use repose_studies::FigureData;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -277,7 +278,7 @@ pub async fn figure(
         fig.needs_report(k)
     })
     .await?;
-    Ok(Json(fig.data(p.key, &data)))
+    Ok(Json(fig.data(p, &data)))
 }
 
 #[derive(Debug, Serialize, utoipa::ToSchema)]
@@ -340,7 +341,7 @@ pub async fn sweep_figures(
     for p in papers::PAPERS {
         for f in (p.figures)() {
             // Figures of one measured layer on one sweep only.
-            if f.sweeps().len() == 1 && f.axes().is_some() && f.fits(&data).is_ok() {
+            if f.sweeps().len() == 1 && f.axes().is_some() && f.fits(p.quantities, &data).is_ok() {
                 figures.push(FigureRef {
                     paper: p.key.into(),
                     figure: f.key.into(),
@@ -370,7 +371,7 @@ pub async fn sweep_figure(
     })?;
     let needs = fig.sweeps().iter().any(|k| fig.needs_report(k));
     let data = sweep_data(&s.store, &sweep, needs).await?;
-    fig.from_sweep(p.key, data).map(Json).map_err(|e| {
+    fig.from_sweep(p, data).map(Json).map_err(|e| {
         let field = match e {
             repose_studies::figure::FigureError::Axis(_) => "x",
             repose_studies::figure::FigureError::Metric(_) => "y",

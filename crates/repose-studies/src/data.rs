@@ -2,6 +2,7 @@
 //! study sweep, its points, its samples and (where a figure draws a
 //! recorded curve) the report of its first sample.
 
+use crate::quantity::{x_value, Quantity};
 use repose_store::{Aggregate, Point, Sample};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -53,12 +54,14 @@ impl SweepData {
             .filter(|a| a.n > 0)
     }
 
-    /// `(x, statistics)` along one axis, optionally at one value of another, sorted by x.
+    /// `(x, statistics)` along one axis (or a computed quantity),
+    /// optionally at one value of another, sorted by x.
     pub fn along(
         &self,
         x: &str,
         fixed: Option<(&str, f64)>,
         metric: &str,
+        quantities: &[Quantity],
     ) -> Vec<(f64, Aggregate)> {
         let mut v: Vec<(f64, Aggregate)> = self
             .points
@@ -66,7 +69,7 @@ impl SweepData {
             .filter(|p| fixed.is_none_or(|(k, val)| same(p.point.get(k), val)))
             .filter_map(|p| {
                 let a = p.metrics.get(metric).copied().filter(|a| a.n > 0)?;
-                Some((crate::papers::x_value(&p.point, x)?, a))
+                Some((x_value(&p.point, x, quantities)?, a))
             })
             .collect();
         v.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -1,11 +1,11 @@
-//! A figure's data: what the API serves, the page draws and the
-//! reproduction report prints, computed from the stored points and samples
-//! of the sweeps behind it, with its theory curves evaluated here.
+//! A figure as a paper describes it (its layers: what to draw from which
+//! sweep, theory curves, quoted values, fits) and a figure's data: what
+//! the API serves, the page draws and the reproduction report prints.
+//! `draw` computes the one from the other.
 
-use crate::data::{same, StudyData, SweepData};
-use crate::fit::Fit;
-use crate::papers::{series_value, x_value, Figure, Layer};
-use repose_store::Aggregate;
+use crate::data::SweepData;
+use crate::fit::{Fit, Model};
+use repose_store::Point;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -136,269 +136,136 @@ pub enum FigureError {
     Metric(String),
 }
 
+/// A figure of a paper.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    /// Key within the paper, e.g. `3` or `7a`.
+    pub key: &'static str,
+    pub title: &'static str,
+    pub caption: &'static str,
+    pub x_label: &'static str,
+    pub y_label: &'static str,
+    pub log_x: bool,
+    pub layers: Vec<Layer>,
+}
+
+/// A figure as the API lists it.
+#[derive(Debug, Clone, Serialize, utoipa::ToSchema)]
+pub struct FigureSummary {
+    pub key: String,
+    pub title: String,
+    pub caption: String,
+    /// The study sweeps it draws from.
+    pub sweeps: Vec<String>,
+}
+
+/// One thing a figure draws.
+#[derive(Debug, Clone)]
+pub enum Layer {
+    /// Means of a metric (or the sum of several) along a swept axis, one
+    /// series per value of another axis if `series` is set. The label names
+    /// the data, or with a series the symbol of its axis ("μ = 0.2").
+    Measured {
+        sweep: &'static str,
+        x: &'static str,
+        series: Option<&'static str>,
+        y: &'static [&'static str],
+        label: &'static str,
+    },
+    /// A theory curve over the x range of the measured data.
+    Curve {
+        label: &'static str,
+        f: fn(f64) -> Option<f64>,
+    },
+    /// A theory value at each measured x, from the mean of a metric there
+    /// (eq. 4 evaluated with the measured θ_R).
+    AtPoints {
+        sweep: &'static str,
+        x: &'static str,
+        input: &'static str,
+        label: &'static str,
+        f: fn(f64, f64) -> Option<f64>,
+    },
+    /// Values the paper quotes: `(x, y, error)`.
+    Quoted {
+        label: &'static str,
+        points: &'static [(f64, f64, f64)],
+    },
+    /// A curve recorded in the report of a sweep's first sample.
+    Recorded {
+        sweep: &'static str,
+        curve: &'static str,
+        label: &'static str,
+    },
+    /// A level line at the mean of a metric at one point of a sweep.
+    Level {
+        sweep: &'static str,
+        at: (&'static str, f64),
+        metric: &'static str,
+        label: &'static str,
+    },
+    /// A model fitted to the means of a metric along `x` (weighted by
+    /// their standard errors), one fit per value of `series`, over the
+    /// points `keep` accepts: the fitted curves and their constants.
+    Fit {
+        sweep: &'static str,
+        x: &'static str,
+        series: Option<&'static str>,
+        y: &'static str,
+        model: &'static Model,
+        start: &'static [f64],
+        label: &'static str,
+        keep: fn(&Point) -> bool,
+    },
+    /// Series and fits a paper computes from a sweep in its own way (fits
+    /// of fitted constants, say).
+    Computed {
+        sweep: &'static str,
+        f: fn(&SweepData) -> (Vec<SeriesData>, Vec<FitData>),
+    },
+}
+
+impl Layer {
+    /// The study sweep this layer reads, if any.
+    pub fn sweep(&self) -> Option<&'static str> {
+        match self {
+            Layer::Measured { sweep, .. }
+            | Layer::AtPoints { sweep, .. }
+            | Layer::Recorded { sweep, .. }
+            | Layer::Level { sweep, .. }
+            | Layer::Fit { sweep, .. }
+            | Layer::Computed { sweep, .. } => Some(sweep),
+            Layer::Curve { .. } | Layer::Quoted { .. } => None,
+        }
+    }
+}
+
 impl Figure {
-    /// The figure from the data of its study sweeps; sweeps without data
-    /// are listed as missing and their layers left out.
-    pub fn data(&self, paper: &str, study: &StudyData) -> FigureData {
-        let (x, series_axis) = self.axes().unzip();
-        let mut out = FigureData {
-            paper: paper.to_string(),
-            figure: self.key.to_string(),
-            title: self.title.to_string(),
-            caption: self.caption.to_string(),
-            x_label: self.x_label.to_string(),
-            y_label: self.y_label.to_string(),
-            log_x: self.log_x,
-            x: x.map(String::from),
-            series_axis: series_axis.flatten().map(String::from),
-            series: Vec::new(),
-            sweeps: BTreeMap::new(),
-            missing: Vec::new(),
-            fits: Vec::new(),
-        };
-        for key in self.sweeps() {
-            match study.get(&key) {
-                Some(d) => {
-                    out.sweeps.insert(key, d.id.clone());
-                }
-                None => out.missing.push(key),
+    /// The study sweeps it reads, without repeats.
+    pub fn sweeps(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for s in self.layers.iter().filter_map(Layer::sweep) {
+            if !out.iter().any(|o| o == s) {
+                out.push(s.to_string());
             }
         }
-        for layer in &self.layers {
-            out.series.extend(self.layer(layer, study));
-            out.fits.extend(crate::fitted::fits(
-                layer,
-                study,
-                self.log_x,
-                &mut out.series,
-            ));
-        }
-        let range = x_range(&out.series).filter(|(lo, hi)| hi > lo);
-        for layer in &self.layers {
-            if let (Layer::Curve { label, f }, Some((lo, hi))) = (layer, range) {
-                out.series.push(curve(label, *f, lo, hi, self.log_x));
-            }
-        }
-        level_lines(&self.layers, study, range, &mut out.series);
         out
     }
 
-    /// Whether the figure can be drawn from this one sweep: its measured
-    /// layers' axes are swept and their metrics measured.
-    pub fn fits(&self, sweep: &SweepData) -> Result<(), FigureError> {
-        for layer in &self.layers {
-            if let Layer::Measured { x, series, y, .. } = layer {
-                for axis in std::iter::once(*x).chain(*series) {
-                    if !sweep
-                        .points
-                        .iter()
-                        .any(|p| x_value(&p.point, axis).is_some())
-                    {
-                        return Err(FigureError::Axis(axis.to_string()));
-                    }
-                }
-                for m in y.iter() {
-                    if !sweep.points.iter().any(|p| p.metrics.contains_key(*m)) {
-                        return Err(FigureError::Metric(m.to_string()));
-                    }
-                }
-            }
-        }
-        Ok(())
+    /// Whether drawing it needs the report of a sweep's first sample.
+    pub fn needs_report(&self, sweep: &str) -> bool {
+        self.layers
+            .iter()
+            .any(|l| matches!(l, Layer::Recorded { sweep: s, .. } if *s == sweep))
     }
 
-    /// The figure drawn from one sweep for every study key it reads.
-    pub fn from_sweep(&self, paper: &str, sweep: SweepData) -> Result<FigureData, FigureError> {
-        self.fits(&sweep)?;
-        let mut study = StudyData::default();
-        for key in self.sweeps() {
-            study.sweeps.insert(key, sweep.clone());
-        }
-        Ok(self.data(paper, &study))
-    }
-
-    fn layer(&self, layer: &Layer, study: &StudyData) -> Vec<SeriesData> {
-        match layer {
-            Layer::Measured {
-                sweep,
-                x,
-                series,
-                y,
-                label,
-            } => study
-                .get(sweep)
-                .map(|d| measured(d, x, *series, y, label))
-                .unwrap_or_default(),
-            Layer::AtPoints {
-                sweep,
-                x,
-                input,
-                label,
-                f,
-            } => study
-                .get(sweep)
-                .map(|d| vec![at_points(d, x, input, label, *f)])
-                .unwrap_or_default(),
-            Layer::Quoted { label, points } => vec![SeriesData {
-                name: label.to_string(),
-                kind: Kind::Quoted,
-                series_value: None,
-                points: points
-                    .iter()
-                    .map(|(x, y, e)| PlotPoint {
-                        sd: Some(*e),
-                        ..PlotPoint::value(*x, *y)
-                    })
-                    .collect(),
-                band: None,
-            }],
-            Layer::Recorded {
-                sweep,
-                curve,
-                label,
-            } => study
-                .get(sweep)
-                .and_then(|d| recorded(d, curve, label))
-                .into_iter()
-                .collect(),
-            Layer::Curve { .. }
-            | Layer::Level { .. }
-            | Layer::Fit { .. }
-            | Layer::Computed { .. } => Vec::new(),
-        }
-    }
-}
-
-/// Statistics of the sum of several metrics at a point (sd and sem in quadrature).
-fn summed(p: &repose_store::Point, y: &[&str]) -> Option<Aggregate> {
-    let aggs: Vec<Aggregate> = y
-        .iter()
-        .map(|m| p.metrics.get(*m).copied().filter(|a| a.n > 0))
-        .collect::<Option<_>>()?;
-    let quad = |f: fn(&Aggregate) -> Option<f64>| -> Option<f64> {
-        aggs.iter()
-            .map(|a| f(a).map(|v| v * v))
-            .sum::<Option<f64>>()
-            .map(f64::sqrt)
-    };
-    Some(Aggregate {
-        n: aggs.iter().map(|a| a.n).min().unwrap_or(0),
-        mean: aggs.iter().map(|a| a.mean).sum(),
-        sd: quad(|a| a.sd),
-        sem: quad(|a| a.sem),
-    })
-}
-
-/// Means of `y` (summed over its metrics) along `x`, one series per
-/// value of `series`.
-pub(crate) fn measured(
-    d: &SweepData,
-    x: &str,
-    series: Option<&str>,
-    y: &[&str],
-    label: &str,
-) -> Vec<SeriesData> {
-    // Series values in order of first appearance, then sorted numerically.
-    let mut values: Vec<Option<Value>> = Vec::new();
-    for p in &d.points {
-        let v = series.map(|s| series_value(&p.point, s));
-        if !values.contains(&v) {
-            values.push(v);
-        }
-    }
-    let key = |v: &Option<Value>| v.as_ref().and_then(Value::as_f64).unwrap_or(0.0);
-    values.sort_by(|a, b| key(a).total_cmp(&key(b)));
-    values
-        .into_iter()
-        .map(|value| {
-            let mut points: Vec<PlotPoint> = d
-                .points
-                .iter()
-                .filter(|p| series.map(|s| series_value(&p.point, s)) == value)
-                .filter_map(|p| {
-                    let xv = x_value(&p.point, x)?;
-                    let agg = summed(p, y).unwrap_or(Aggregate::EMPTY);
-                    Some(PlotPoint {
-                        x: xv,
-                        y: agg.mean,
-                        sd: agg.sd,
-                        sem: agg.sem,
-                        n: Some(agg.n),
-                        failures: Some(p.failures),
-                        samples: sample_values(d, &p.point, y),
-                        flag: None,
-                    })
-                })
-                .collect();
-            points.sort_by(|a, b| a.x.total_cmp(&b.x));
-            let name = match &value {
-                Some(v) => format!("{label} = {v}"),
-                None => label.to_string(),
-            };
-            SeriesData {
-                name,
-                kind: Kind::Measured,
-                series_value: value,
-                points,
-                band: None,
-            }
+    /// The axis the measured layers plot along, and the series axis.
+    pub fn axes(&self) -> Option<(&'static str, Option<&'static str>)> {
+        self.layers.iter().find_map(|l| match l {
+            Layer::Measured { x, series, .. } => Some((*x, *series)),
+            _ => None,
         })
-        .collect()
-}
-
-/// The values of the single samples at a point (summed over `y`).
-fn sample_values(d: &SweepData, point: &serde_json::Map<String, Value>, y: &[&str]) -> Vec<f64> {
-    d.samples
-        .iter()
-        .filter(|s| &s.point == point)
-        .filter_map(|s| {
-            y.iter()
-                .map(|m| s.metrics.get(*m).copied())
-                .sum::<Option<f64>>()
-        })
-        .collect()
-}
-
-fn at_points(
-    d: &SweepData,
-    x: &str,
-    input: &str,
-    label: &str,
-    f: fn(f64, f64) -> Option<f64>,
-) -> SeriesData {
-    let points = d
-        .along(x, None, input)
-        .into_iter()
-        .filter_map(|(xv, a)| Some(PlotPoint::value(xv, f(xv, a.mean?)?)))
-        .collect();
-    SeriesData {
-        name: label.to_string(),
-        kind: Kind::Theory,
-        series_value: None,
-        points,
-        band: None,
     }
-}
-
-fn recorded(d: &SweepData, curve: &str, label: &str) -> Option<SeriesData> {
-    let report = d.report.as_ref()?;
-    let c = report["series"]
-        .as_array()?
-        .iter()
-        .find(|c| c["name"] == curve)?;
-    let points = c["points"]
-        .as_array()?
-        .iter()
-        .filter_map(|p| Some(PlotPoint::value(p[0].as_f64()?, p[1].as_f64()?)))
-        .collect();
-    let band = serde_json::from_value(c["band"].clone()).ok();
-    Some(SeriesData {
-        name: label.to_string(),
-        kind: Kind::Recorded,
-        series_value: None,
-        points,
-        band,
-    })
 }
 
 /// The x range the measured and recorded series span.
@@ -437,39 +304,5 @@ pub(crate) fn curve(
             .filter_map(|k| Some(PlotPoint::value(at(k), f(at(k))?)))
             .collect(),
         band: None,
-    }
-}
-
-fn level_lines(
-    layers: &[Layer],
-    study: &StudyData,
-    range: Option<(f64, f64)>,
-    out: &mut Vec<SeriesData>,
-) {
-    let Some((lo, hi)) = range else { return };
-    for layer in layers {
-        let Layer::Level {
-            sweep,
-            at,
-            metric,
-            label,
-        } = layer
-        else {
-            continue;
-        };
-        let level = study
-            .get(sweep)
-            .and_then(|d| d.points.iter().find(|p| same(p.point.get(at.0), at.1)))
-            .and_then(|p| p.metrics.get(*metric))
-            .and_then(|a| a.mean);
-        if let Some(y) = level {
-            out.push(SeriesData {
-                name: label.to_string(),
-                kind: Kind::Level,
-                series_value: None,
-                points: vec![PlotPoint::value(lo, y), PlotPoint::value(hi, y)],
-                band: None,
-            });
-        }
     }
 }

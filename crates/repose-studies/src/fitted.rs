@@ -4,9 +4,9 @@
 //! reproduction report show the same numbers.
 
 use crate::data::{StudyData, SweepData};
-use crate::figure::{curve, FitData, Kind, SeriesData};
+use crate::figure::{curve, FitData, Kind, Layer, SeriesData};
 use crate::fit::{fit, Datum, Fit, FitError, Model};
-use crate::papers::{series_value, symbol, x_value, Layer};
+use crate::quantity::{series_value, symbol, x_value, Quantity};
 use repose_store::{Aggregate, Point};
 use serde_json::Value;
 
@@ -16,6 +16,7 @@ pub(crate) fn fits(
     layer: &Layer,
     study: &StudyData,
     log_x: bool,
+    quantities: &[Quantity],
     series: &mut Vec<SeriesData>,
 ) -> Vec<FitData> {
     match layer {
@@ -37,13 +38,17 @@ pub(crate) fn fits(
                 by: *by,
                 y,
                 keep: *keep,
+                quantities,
             };
             along
                 .groups(d)
                 .into_iter()
                 .map(|(value, data)| {
                     let name = match &value {
-                        Some(v) => format!("{label}, {} = {v}", symbol(by.unwrap_or_default())),
+                        Some(v) => format!(
+                            "{label}, {} = {v}",
+                            symbol(by.unwrap_or_default(), quantities)
+                        ),
                         None => label.to_string(),
                     };
                     fitted(model, start, &name, value, &data, log_x, series)
@@ -68,6 +73,8 @@ pub struct Along<'a> {
     pub by: Option<&'a str>,
     pub y: &'a str,
     pub keep: fn(&Point) -> bool,
+    /// The paper's computed quantities, which `x` and `by` may name.
+    pub quantities: &'a [Quantity],
 }
 
 impl Along<'_> {
@@ -79,10 +86,10 @@ impl Along<'_> {
             let Some(a) = p.metrics.get(self.y).copied().filter(|a| a.n > 0) else {
                 continue;
             };
-            let (Some(x), Some(y)) = (x_value(&p.point, self.x), a.mean) else {
+            let (Some(x), Some(y)) = (x_value(&p.point, self.x, self.quantities), a.mean) else {
                 continue;
             };
-            let value = self.by.map(|s| series_value(&p.point, s));
+            let value = self.by.map(|s| series_value(&p.point, s, self.quantities));
             let datum = Datum {
                 x,
                 y,
@@ -103,12 +110,13 @@ impl Along<'_> {
     }
 
     /// Every point's mean of `y` along `x`, as one group.
-    pub fn means(x: &str, y: &str, d: &SweepData) -> Vec<Datum> {
+    pub fn means(x: &str, y: &str, d: &SweepData, quantities: &[Quantity]) -> Vec<Datum> {
         let along = Along {
             x,
             by: None,
             y,
             keep: |_| true,
+            quantities,
         };
         along.groups(d).pop().map(|g| g.1).unwrap_or_default()
     }

@@ -5,8 +5,10 @@
 //!
 //! * [`papers`] — each paper's study sweeps and figures (which metric
 //!   against which axis, theory curves, the values the paper quotes) and the
-//!   comparison of its stated results with ours.
-//! * [`figure`] — a figure's data from the stored points and samples of
+//!   comparison of its stated results with ours, and [`PAPERS`], the
+//!   registry. Papers are written in the terms of [`paper`], [`figure`],
+//!   [`quantity`], [`data`] and [`compare`], which import no paper.
+//! * [`draw`] — a figure's data from the stored points and samples of
 //!   its sweeps: what the API serves, the page draws and the reports print.
 //! * [`reproduction`] and [`tradeoff`] — the two reports: a paper reproduced
 //!   through the service, and what each fidelity setting costs and changes.
@@ -20,12 +22,16 @@
 pub mod chart;
 pub mod compare;
 pub mod data;
+pub mod draw;
 pub mod figure;
 pub mod fit;
 pub mod fitted;
+pub mod paper;
 pub mod papers;
+pub mod quantity;
 pub mod reproduction;
 pub mod tradeoff;
 
 pub use figure::FigureData;
-pub use papers::{Paper, PAPERS};
+pub use paper::Paper;
+pub use papers::PAPERS;

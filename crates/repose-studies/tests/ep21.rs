@@ -142,7 +142,7 @@ fn constants_far_from_the_papers_are_judged_to_differ() {
 #[test]
 fn the_figures_draw_the_fits_and_mark_regime_one() {
     let data = study(heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5));
-    let figure = |key: &str| ep21::PAPER.figure(key).unwrap().data("ep21", &data);
+    let figure = |key: &str| ep21::PAPER.figure(key).unwrap().data(&ep21::PAPER, &data);
 
     let f2 = figure("2");
     let fit = f2.fits[0].fit.as_ref().expect("eq. 1 fitted on Earth");
@@ -211,7 +211,7 @@ fn the_figures_draw_the_fits_and_mark_regime_one() {
 fn missing_sweeps_leave_figures_empty_and_fits_absent() {
     let data = StudyData::default();
     for f in (ep21::PAPER.figures)() {
-        let d = f.data("ep21", &data);
+        let d = f.data(&ep21::PAPER, &data);
         assert!(d.fits.is_empty(), "{}", f.key);
         assert!(!d.missing.is_empty(), "{}", f.key);
     }

@@ -2,9 +2,10 @@
 //! stability: molecular dynamics of granular particles*: figures 2–5 and 7,
 //! and the stiffness and damping sensitivities of section 4.
 
-use super::{Figure, Layer, Paper, Reduced, StudySweep};
 use crate::compare::{weighted_slope, Comparison};
 use crate::data::StudyData;
+use crate::figure::{Figure, Layer};
+use crate::paper::{Paper, Reduced, StudySweep};
 use repose_physics::theory::{marginal_stability_angle, tilting_angle};
 use repose_store::Aggregate;
 use serde_json::{json, Value};
@@ -436,7 +437,7 @@ fn statements(data: &StudyData) -> Vec<Comparison> {
     }
     let heights = data
         .get("fig2a")
-        .map(|d| d.along("box.height", None, "theta_r"))
+        .map(|d| d.along("box.height", None, "theta_r", PAPER.quantities))
         .unwrap_or_default();
     if let Some((slope, se)) = weighted_slope(&heights) {
         rows.push(Comparison::statement(

@@ -7,6 +7,7 @@ use super::curves::{
     PACKING, PHI_C, PHI_INF,
 };
 use super::figures::{d_by_gravity, d_data, on_earth};
+use super::quantities::{d_um, g_tilde, QUANTITIES};
 use crate::compare::{weighted_slope, Comparison};
 use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Fit, Param};
@@ -105,7 +106,7 @@ fn param_row(quantity: String, paper: f64, unit: &str, p: &Param, points: usize)
 }
 
 fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps));
+    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps), &QUANTITIES);
     let result = fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string());
     fit_rows(
         "eq. 1 on Earth",
@@ -135,7 +136,7 @@ fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let data = Along::means("ep21.bond", "theta_r", heaps);
+    let data = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
     let result = fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string());
     fit_rows(
         "eq. 4",
@@ -148,7 +149,7 @@ fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
 /// rise with g (about 10 % from g̃ = 0.06 to 100, read as ± 5 %), from a
 /// weighted straight line in log g̃.
 fn dry_rows(dry: &SweepData) -> Vec<Comparison> {
-    let along: Vec<(f64, Aggregate)> = dry.along("ep21.g_tilde", None, "theta_r");
+    let along: Vec<(f64, Aggregate)> = dry.along("ep21.g_tilde", None, "theta_r", &QUANTITIES);
     let means: Vec<f64> = along.iter().filter_map(|(_, a)| a.mean).collect();
     let level = (!means.is_empty()).then(|| {
         let n = means.len() as f64;
@@ -197,7 +198,7 @@ fn dry_rows(dry: &SweepData) -> Vec<Comparison> {
 }
 
 fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
-    let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing);
+    let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing, &QUANTITIES);
     let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
     fit_rows(
         "packing fit",
@@ -216,7 +217,7 @@ fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
 fn regime_row(heaps: &SweepData) -> Comparison {
     let mut levels: Vec<(f64, Vec<(f64, bool)>)> = Vec::new();
     for p in &heaps.points {
-        let (Some(g), Some(d)) = (super::g_tilde(&p.point), super::d_um(&p.point)) else {
+        let (Some(g), Some(d)) = (g_tilde(&p.point), d_um(&p.point)) else {
             continue;
         };
         let formed = p.metrics.get("theta_r").is_some_and(|a| a.n > 0);

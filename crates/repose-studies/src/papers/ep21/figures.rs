@@ -5,12 +5,12 @@ use super::curves::{
     ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ1_HELD, EQ2, EQ2_HALF, EQ4, MU_INF,
     MU_INF_BOND, PACKING, PHI_C, PHI_INF,
 };
-use super::{BOND_REGIME_I, DENSITY, G_EARTH, SURFACE_ENERGY};
+use super::quantities::{g_tilde, BOND_REGIME_I, DENSITY, G_EARTH, QUANTITIES, SURFACE_ENERGY};
 use crate::data::SweepData;
-use crate::figure::{measured, FitData, Kind, PlotPoint, SeriesData};
+use crate::draw::measured;
+use crate::figure::{Figure, FitData, Kind, Layer, PlotPoint, SeriesData};
 use crate::fit::Datum;
 use crate::fitted::{fitted, weights_all_or_none, Along};
-use crate::papers::{Figure, Layer};
 use repose_store::Point;
 use serde_json::Value;
 
@@ -56,18 +56,16 @@ fn flag_regime(series: &mut [SeriesData], bo: impl Fn(f64, Option<&Value>) -> Op
 pub(super) fn on_earth(d: &SweepData) -> SweepData {
     let mut earth = d.clone();
     // g̃ is rounded to nine digits, so Earth's reads back as exactly 1.
-    earth
-        .points
-        .retain(|p| super::g_tilde(&p.point) == Some(1.0));
+    earth.points.retain(|p| g_tilde(&p.point) == Some(1.0));
     earth
 }
 
 /// Fig. 2: θ_r against d on Earth, eq. 1 fitted with both constants free.
 fn earth_heaps(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
     let earth = on_earth(d);
-    let mut series = measured(&earth, D, None, THETA, "ours, g̃ = 1");
+    let mut series = measured(&earth, (D, None), THETA, "ours, g̃ = 1", &QUANTITIES);
     flag_regime(&mut series, |x, _| Some(bond_at(x, 1.0)));
-    let data = Along::means(D, "theta_r", &earth);
+    let data = Along::means(D, "theta_r", &earth, &QUANTITIES);
     let fit = fitted(
         &EQ1,
         &[0.45, 80.0],
@@ -119,7 +117,7 @@ fn heaps_along(
     y: &'static [&'static str],
     bo: fn(f64, Option<&Value>) -> Option<f64>,
 ) -> Vec<SeriesData> {
-    let mut series = measured(d, x, Some(G), y, "g̃");
+    let mut series = measured(d, (x, Some(G)), y, "g̃", &QUANTITIES);
     flag_regime(&mut series, bo);
     series
 }
@@ -186,6 +184,7 @@ pub fn d_by_gravity(d: &SweepData) -> Vec<(f64, FittedD)> {
         by: Some(G),
         y: "theta_r",
         keep: every,
+        quantities: &QUANTITIES,
     };
     along
         .groups(d)

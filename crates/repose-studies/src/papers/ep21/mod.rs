@@ -23,8 +23,14 @@
 pub mod compare;
 pub mod curves;
 pub mod figures;
+pub mod quantities;
 
-use super::{Paper, Quantity, Reduced, StudySweep};
+pub use quantities::{
+    bond, d_um, g_tilde, BOND_REGIME_I, DENSITY, GRAVITIES, G_EARTH, QUANTITIES, SURFACE_ENERGY,
+};
+
+use crate::paper::{Paper, Reduced, StudySweep};
+use quantities::rounded;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
@@ -43,14 +49,6 @@ pub static PAPER: Paper = Paper {
     point_label,
 };
 
-/// Earth's gravity, m/s²: g̃ = g / G_EARTH.
-pub const G_EARTH: f64 = 9.81;
-/// The gravity levels of the paper by g̃: Pluto, Moon, Mars, Earth, 10 g, 100 g.
-pub const GRAVITIES: [f64; 6] = [0.063, 0.165, 0.378, 1.0, 10.0, 100.0];
-/// Glass (Table 1): density and surface energy, the values of every
-/// study sweep's base (the Bond number is computed with them).
-pub const DENSITY: f64 = 2500.0;
-pub const SURFACE_ENERGY: f64 = 0.05;
 /// Grain sizes of the heaps, µm. A heap's cost in steps grows as
 /// d^−0.9 g̃^−0.5 where the cohesion bound sets the softened modulus
 /// (`kappa_cohesion`): the 60 µm heap on Pluto costs 50 times the 1 mm heap
@@ -58,61 +56,6 @@ pub const SURFACE_ENERGY: f64 = 0.05;
 const SIZES_UM: [f64; 6] = [60.0, 100.0, 160.0, 250.0, 500.0, 1000.0];
 /// Grain sizes of the packings, µm.
 const PACKING_SIZES_UM: [f64; 5] = [50.0, 100.0, 200.0, 400.0, 1000.0];
-/// The Bond number above which the paper sees irregular heaps (regime I).
-pub const BOND_REGIME_I: f64 = 1e4;
-
-static QUANTITIES: [Quantity; 4] = [
-    Quantity {
-        name: "ep21.d_um",
-        symbol: "d",
-        f: d_um,
-    },
-    Quantity {
-        name: "ep21.g_tilde",
-        symbol: "g̃",
-        f: g_tilde,
-    },
-    Quantity {
-        name: "ep21.bond",
-        symbol: "Bo",
-        f: bond,
-    },
-    Quantity {
-        name: "ep21.d_sqrt_g_um",
-        symbol: "d√g̃",
-        f: |p| Some(d_um(p)? * g_tilde(p)?.sqrt()),
-    },
-];
-
-/// `x` to nine significant digits: a value set as 0.165 g reads back as
-/// 0.165, not 0.16499999999999998, in labels and series keys.
-fn rounded(x: f64) -> f64 {
-    format!("{x:.8e}").parse().unwrap_or(x)
-}
-
-/// The grain diameter of a point, µm.
-pub fn d_um(point: &Map<String, Value>) -> Option<f64> {
-    Some(rounded(point.get("grains.diameter")?.as_f64()? * 1e6))
-}
-
-/// The gravity of a point in Earth's: g̃ = |g| / 9.81 m/s².
-pub fn g_tilde(point: &Map<String, Value>) -> Option<f64> {
-    let g = point.get("gravity")?.as_array()?;
-    let g2: f64 = g
-        .iter()
-        .map(|c| c.as_f64().map(|c| c * c))
-        .sum::<Option<f64>>()?;
-    Some(rounded(g2.sqrt() / G_EARTH))
-}
-
-/// The Bond number of a point, Bo = 12 γ / (d² g ρ), with the paper's
-/// factor 12 (the pair force πγd against the weight is half of it).
-pub fn bond(point: &Map<String, Value>) -> Option<f64> {
-    let d = point.get("grains.diameter")?.as_f64()?;
-    let g = g_tilde(point)? * G_EARTH;
-    Some(12.0 * SURFACE_ENERGY / (d * d * g * DENSITY))
-}
-
 /// A point as the paper names it: `d = 60 µm, g̃ = 0.063` (either part
 /// alone where the other is not an axis).
 fn point_label(point: &Map<String, Value>) -> Option<String> {
