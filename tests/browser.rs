@@ -65,7 +65,7 @@ struct Page {
 
 impl Page {
     fn launch(binary: &PathBuf) -> Page {
-        let profile = std::env::temp_dir().join(format!("repose-chromium-{}", std::process::id()));
+        let profile = repose_testkit::scratch_dir("repose-chromium");
         let mut chrome = Command::new(binary)
             .args([
                 "--headless",

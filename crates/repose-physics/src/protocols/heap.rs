@@ -9,7 +9,7 @@ use crate::measure::Profile;
 use crate::models::elekes_parteli::Grains;
 use crate::models::{self, EngineJob, Laws};
 use crate::report::{Curve, Outcome, Phase, RunReport};
-use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
+use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS};
 use crate::setup::Stream;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
@@ -89,14 +89,9 @@ impl Section for HeapSpec {
         c.positive("heap.height", self.height);
         c.positive("heap.inlet_width", self.inlet_width);
         c.non_negative("heap.inlet_floor", self.inlet_floor);
-        c.positive("heap.fill_fraction", self.fill_fraction);
         c.positive("heap.interval", self.interval);
-        c.positive("heap.rest_energy", self.rest_energy);
-        c.non_negative("heap.settle_min", self.settle_min);
-        c.positive("heap.settle_max", self.settle_max);
-        if self.fill_fraction > 0.5 {
-            c.fail("heap.fill_fraction", "a random fill reaches at most 0.5");
-        }
+        let settle = [self.rest_energy, self.settle_min, self.settle_max];
+        pour::check_fill_and_settling(c, "heap", self.fill_fraction, settle);
         if self.max_grains == 0 || self.max_grains > MAX_GRAINS {
             c.fail(
                 "heap.max_grains",
@@ -107,9 +102,6 @@ impl Section for HeapSpec {
             c.fail("heap.inlet_width", "must not exceed the plate");
         }
         c.positive("heap.steady_tolerance", self.steady_tolerance);
-        if self.settle_max < self.settle_min {
-            c.fail("heap.settle_max", "must not be below heap.settle_min");
-        }
         let largest = scene
             .section::<Grains>()
             .map(|g| g.diameter_range().1 / g.diameter)
@@ -190,23 +182,12 @@ static METRICS: [Metric; 9] = [
 ];
 
 impl Protocol for Heap {
-    fn name(&self) -> &'static str {
-        "heap"
-    }
-
-    fn about(&self) -> &'static str {
-        "pour spheres onto a plate with open edges and measure the settled heap's angle of repose θ_r"
-    }
-
-    pour::poured_protocol!(HeapSpec);
-
-    fn sections(&self) -> Vec<SectionDecl> {
-        vec![SectionDecl::of::<HeapSpec>(), SectionDecl::of::<RestSpec>()]
-    }
-
-    fn metrics(&self) -> &'static [Metric] {
-        &METRICS
-    }
+    pour::poured_protocol!(
+        name: "heap",
+        about: "pour spheres onto a plate with open edges and measure the settled heap's angle of repose θ_r",
+        spec: HeapSpec,
+        metrics: METRICS
+    );
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
         models::with_engine::<3, _>(scene, PourJob::<'_, HeapSpec>::of(scene, observer)?)

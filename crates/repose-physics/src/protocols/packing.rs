@@ -8,7 +8,7 @@ use super::{Metric, Observer, Protocol};
 use crate::models::elekes_parteli::{Grains, Material};
 use crate::models::{self, EngineJob, Laws};
 use crate::report::{Curve, Outcome, Phase, RunReport};
-use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS};
+use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS};
 use crate::setup::Stream;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
@@ -74,13 +74,8 @@ impl Section for PackingSpec {
     fn check(&self, scene: &Scene, c: &mut Checks) {
         c.positive("packing.width", self.width);
         c.positive("packing.height", self.height);
-        c.positive("packing.fill_fraction", self.fill_fraction);
-        c.positive("packing.rest_energy", self.rest_energy);
-        c.non_negative("packing.settle_min", self.settle_min);
-        c.positive("packing.settle_max", self.settle_max);
-        if self.fill_fraction > 0.5 {
-            c.fail("packing.fill_fraction", "a random fill reaches at most 0.5");
-        }
+        let settle = [self.rest_energy, self.settle_min, self.settle_max];
+        pour::check_fill_and_settling(c, "packing", self.fill_fraction, settle);
         let [lo, hi] = self.slab;
         if !(0.0 <= lo && lo < hi && hi <= 1.0) {
             c.fail("packing.slab", "needs 0 ≤ lower < upper ≤ 1");
@@ -136,26 +131,12 @@ static METRICS: [Metric; 3] = [
 ];
 
 impl Protocol for Packing {
-    fn name(&self) -> &'static str {
-        "packing"
-    }
-
-    fn about(&self) -> &'static str {
-        "release spheres from rest in a periodic column and measure the packing fraction φ of the settled bed"
-    }
-
-    pour::poured_protocol!(PackingSpec);
-
-    fn sections(&self) -> Vec<SectionDecl> {
-        vec![
-            SectionDecl::of::<PackingSpec>(),
-            SectionDecl::of::<RestSpec>(),
-        ]
-    }
-
-    fn metrics(&self) -> &'static [Metric] {
-        &METRICS
-    }
+    pour::poured_protocol!(
+        name: "packing",
+        about: "release spheres from rest in a periodic column and measure the packing fraction φ of the settled bed",
+        spec: PackingSpec,
+        metrics: METRICS
+    );
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
         models::with_engine::<3, _>(scene, PourJob::<'_, PackingSpec>::of(scene, observer)?)?

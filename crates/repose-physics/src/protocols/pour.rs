@@ -18,12 +18,32 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;
 
-/// The methods the poured protocols (heap, packing) share: 3D spheres of
-/// Elekes & Parteli's model, the pour presets and checks, and the fastest
-/// impact, a grain falling the domain's height (`$spec`'s `height`, in
-/// diameters).
+/// The methods the poured protocols (heap, packing) share: their name and
+/// line, 3D spheres of Elekes & Parteli's model, their own section and the
+/// grains at rest, their metrics, the pour presets and checks, and the
+/// fastest impact, a grain falling the domain's height (`spec`'s `height`,
+/// in diameters).
 macro_rules! poured_protocol {
-    ($spec:ty) => {
+    (name: $name:literal, about: $about:literal, spec: $spec:ty, metrics: $metrics:expr) => {
+        fn name(&self) -> &'static str {
+            $name
+        }
+
+        fn about(&self) -> &'static str {
+            $about
+        }
+
+        fn sections(&self) -> Vec<$crate::scene::SectionDecl> {
+            vec![
+                $crate::scene::SectionDecl::of::<$spec>(),
+                $crate::scene::SectionDecl::of::<$crate::protocols::pour::RestSpec>(),
+            ]
+        }
+
+        fn metrics(&self) -> &'static [$crate::protocols::Metric] {
+            &$metrics
+        }
+
         fn dimensions(&self) -> &'static [usize] {
             &[3]
         }
@@ -386,6 +406,28 @@ pub fn settle<L: ContactLaw<3>, I: Integrator<3>>(
     }
 }
 
+/// The fill and settling keys both poured sections carry (`key.fill_fraction`,
+/// `key.rest_energy`, `key.settle_min`, `key.settle_max`), checked alike.
+pub(super) fn check_fill_and_settling(c: &mut Checks, key: &str, fill: f64, settle: [f64; 3]) {
+    let [rest_energy, settle_min, settle_max] = settle;
+    c.positive(&format!("{key}.fill_fraction"), fill);
+    c.positive(&format!("{key}.rest_energy"), rest_energy);
+    c.non_negative(&format!("{key}.settle_min"), settle_min);
+    c.positive(&format!("{key}.settle_max"), settle_max);
+    if fill > 0.5 {
+        c.fail(
+            &format!("{key}.fill_fraction"),
+            "a random fill reaches at most 0.5",
+        );
+    }
+    if settle_max < settle_min {
+        c.fail(
+            &format!("{key}.settle_max"),
+            format!("must not be below {key}.settle_min"),
+        );
+    }
+}
+
 /// The checks every 3D pouring protocol shares.
 pub fn check_scene(scene: &Scene, c: &mut Checks) {
     check_gravity_down(scene, c);
@@ -429,5 +471,37 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
             ("numerics.integrator", Value::from("verlet")),
             ("numerics.dt_factor", Value::from(0.1)),
         ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::Scene;
+
+    /// The fields a scene names as refused.
+    fn refused(protocol: &str, overrides: &[&str]) -> Vec<String> {
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        Scene::from_toml(&format!("protocol = \"{protocol}\""), &overrides)
+            .expect_err("the scene is refused")
+            .errors
+            .into_iter()
+            .map(|e| e.field)
+            .collect()
+    }
+
+    #[test]
+    fn both_pours_refuse_a_dense_fill_and_a_settling_window_upside_down() {
+        for key in ["heap", "packing"] {
+            let fill = refused(key, &[&format!("{key}.fill_fraction=0.6")]);
+            assert_eq!(fill, [format!("{key}.fill_fraction")]);
+            let window = [
+                format!("{key}.settle_min=50"),
+                format!("{key}.settle_max=40"),
+            ];
+            let window: Vec<&str> = window.iter().map(String::as_str).collect();
+            assert_eq!(refused(key, &window), [format!("{key}.settle_max")]);
+            let rest = refused(key, &[&format!("{key}.rest_energy=0")]);
+            assert_eq!(rest, [format!("{key}.rest_energy")]);
+        }
     }
 }
