@@ -10,7 +10,8 @@ use repose_engine::integrate::Scheme;
 use repose_physics::bench::{throughput, PhaseThroughput};
 use repose_physics::Scene;
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::hash::Hash;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
@@ -71,6 +72,27 @@ const OPTIONS: &[(&str, &[&str])] = &[
     ("Gear-5 integrator", &["numerics.integrator=\"gear5\""]),
 ];
 
+/// What the `× base` columns of an option table mean.
+pub(crate) const AGAINST_BASE: &str =
+    "(× base: cost per particle-step relative to the baseline; above 1 is slower";
+
+/// An option's rates in its two phases (M particle-steps/s), each with its
+/// cost against the first option's (`base`, set by the first call).
+pub(crate) fn against_base(phases: &[PhaseThroughput], base: &mut Option<(f64, f64)>) -> String {
+    let rates = (
+        phases[0].particle_steps_per_second,
+        phases[1].particle_steps_per_second,
+    );
+    let (a, b) = *base.get_or_insert(rates);
+    format!(
+        "{:>12.2} {:>8.2} {:>12.2} {:>8.2}",
+        rates.0 / 1e6,
+        a / rates.0,
+        rates.1 / 1e6,
+        b / rates.1
+    )
+}
+
 /// Particle-steps per second of each option, settled and flowing.
 fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     println!(
@@ -90,20 +112,9 @@ fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
         let phases = throughput(&scene, scale(50_000), scale(20_000))?;
-        let (settled, flow) = (
-            phases[0].particle_steps_per_second,
-            phases[1].particle_steps_per_second,
-        );
-        let (bs, bf) = *base.get_or_insert((settled, flow));
-        println!(
-            "{label:<52} {:>12.2} {:>8.2} {:>12.2} {:>8.2}",
-            settled / 1e6,
-            bs / settled,
-            flow / 1e6,
-            bf / flow
-        );
+        println!("{label:<52} {}", against_base(&phases, &mut base));
     }
-    println!("(× base: cost per particle-step relative to the baseline; above 1 is slower)");
+    println!("{AGAINST_BASE})");
     Ok(ExitCode::SUCCESS)
 }
 
@@ -269,27 +280,38 @@ struct LammpsRow {
 
 /// Median particle-steps/s (wall time of the whole process) per (size, phase)
 /// from the LAMMPS peer CSV.
-fn read_lammps(path: &PathBuf) -> anyhow::Result<HashMap<(String, String), f64>> {
-    let mut reader =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+fn read_lammps(path: &Path) -> anyhow::Result<HashMap<(String, String), f64>> {
+    let rows: Vec<LammpsRow> = peer_rows(path, "W, phase and psteps_per_s_real")?;
     let mut groups: HashMap<(String, String), Vec<f64>> = HashMap::new();
-    for row in reader.deserialize::<LammpsRow>() {
-        let row = row.with_context(|| {
-            format!(
-                "{} lacks the W, phase and psteps_per_s_real columns",
-                path.display()
-            )
-        })?;
+    for row in rows {
         groups
             .entry((row.w, row.phase))
             .or_default()
             .push(row.psteps_per_s_real);
     }
-    Ok(groups
+    Ok(medians(groups))
+}
+
+/// The rows of a peer benchmark's CSV; `columns` names what a row needs.
+pub(crate) fn peer_rows<R: serde::de::DeserializeOwned>(
+    path: &Path,
+    columns: &str,
+) -> anyhow::Result<Vec<R>> {
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    reader
+        .deserialize::<R>()
+        .map(|row| row.with_context(|| format!("{} lacks the {columns} columns", path.display())))
+        .collect()
+}
+
+/// The median of each group of rates.
+pub(crate) fn medians<K: Eq + Hash>(groups: HashMap<K, Vec<f64>>) -> HashMap<K, f64> {
+    groups
         .into_iter()
         .map(|(k, mut v)| {
             v.sort_by(f64::total_cmp);
             (k, v[v.len() / 2])
         })
-        .collect())
+        .collect()
 }

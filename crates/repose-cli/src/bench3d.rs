@@ -4,8 +4,9 @@
 //! prints the ratio. `--heap --options`: the cost of each 3D physics
 //! option on the same scene.
 
-use crate::bench::{throughput_cells, throughput_header, BenchArgs};
-use anyhow::Context;
+use crate::bench::{
+    against_base, medians, peer_rows, throughput_cells, throughput_header, BenchArgs, AGAINST_BASE,
+};
 use repose_physics::bench::heap::{heap_throughput, HeapSteps, LIGGGHTS_HEAP};
 use repose_physics::bench::PhaseThroughput;
 use repose_physics::Scene;
@@ -78,27 +79,17 @@ fn print_row(p: &PhaseThroughput, peer: Option<&f64>) {
 /// Particle-steps per second of each 3D option, pouring and settled.
 fn options(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     println!(
-        "{:<50} {:>10} {:>8} {:>12} {:>8} {:>9}",
+        "{:<50} {:>12} {:>8} {:>12} {:>8} {:>9}",
         "option (2000-sphere heap)", "pour M/s", "× base", "settled M/s", "× base", "contacts"
     );
     let mut base: Option<(f64, f64)> = None;
     for (label, overrides) in OPTIONS {
         let phases = heap_throughput(&scene(args, overrides)?, steps(args))?;
-        let (pour, settled) = (
-            phases[0].particle_steps_per_second,
-            phases[1].particle_steps_per_second,
-        );
-        let (bp, bs) = *base.get_or_insert((pour, settled));
-        println!(
-            "{label:<50} {:>10.2} {:>8.2} {:>12.2} {:>8.2} {:>9.2}",
-            pour / 1e6,
-            bp / pour,
-            settled / 1e6,
-            bs / settled,
-            2.0 * phases[1].touching_end as f64 / phases[1].grains_end as f64
-        );
+        let contacts = 2.0 * phases[1].touching_end as f64 / phases[1].grains_end as f64;
+        let costs = against_base(&phases, &mut base);
+        println!("{label:<50} {costs} {contacts:>9.2}");
     }
-    println!("(× base: cost per particle-step relative to the baseline; above 1 is slower;");
+    println!("{AGAINST_BASE};");
     println!(
         " contacts: grain-grain contacts per grain in the settled heap, which each option shapes)"
     );
@@ -116,16 +107,9 @@ struct LiggghtsRow {
 /// Median particle-steps/s over LIGGGHTS's own loop time, per phase, of
 /// the `epsd2` rows (the rolling model of the paper and of this engine).
 fn read_liggghts(path: &Path) -> anyhow::Result<HashMap<&'static str, f64>> {
-    let mut reader =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let rows: Vec<LiggghtsRow> = peer_rows(path, "rolling, phase and psteps_per_s_loop")?;
     let mut groups: HashMap<&'static str, Vec<f64>> = HashMap::new();
-    for row in reader.deserialize::<LiggghtsRow>() {
-        let row = row.with_context(|| {
-            format!(
-                "{} lacks the rolling, phase and psteps_per_s_loop columns",
-                path.display()
-            )
-        })?;
+    for row in rows {
         let phase = match row.phase.as_str() {
             "pour" => "pour",
             "settled" => "settled",
@@ -135,11 +119,5 @@ fn read_liggghts(path: &Path) -> anyhow::Result<HashMap<&'static str, f64>> {
             groups.entry(phase).or_default().push(row.psteps_per_s_loop);
         }
     }
-    Ok(groups
-        .into_iter()
-        .map(|(k, mut v)| {
-            v.sort_by(f64::total_cmp);
-            (k, v[v.len() / 2])
-        })
-        .collect())
+    Ok(medians(groups))
 }
