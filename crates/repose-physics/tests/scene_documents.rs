@@ -4,102 +4,95 @@
 //! resolves, or rejected with errors that each name a field. Never a panic.
 
 use proptest::prelude::*;
+use repose_physics::registry;
+use repose_physics::scene::Numerics;
 use repose_physics::Scene;
 use serde_json::{Map, Value};
 
-/// Keys the scene sections and protocols know, so that documents reach the
-/// checks behind the first unknown key.
-const KEYS: &[&str] = &[
-    "protocol",
-    "seed",
-    "preset",
-    "model",
-    "dimension",
-    "gravity",
-    "units",
-    "numerics",
-    "integrator",
-    "dt_factor",
-    "dt",
-    "threads",
-    "skin",
-    "contact",
-    "mu",
-    "k_n",
-    "gamma_n",
-    "gamma_s",
-    "k_s",
-    "normal_force",
-    "shear_spring",
-    "box",
-    "width",
-    "height",
-    "grains",
-    "radius",
-    "radius_sd",
-    "diameter",
-    "density",
-    "mix",
-    "fraction",
-    "material",
-    "youngs_modulus",
-    "poisson",
-    "restitution",
-    "friction",
-    "rolling_friction",
-    "surface_energy",
-    "d_min",
-    "d_max",
-    "kappa",
-    "kappa_cohesion",
-    "cohesion_scaling",
-    "damping",
-    "rolling",
-    "cohesion",
-    "rotation",
-    "tangential_cap",
-    "limit_load",
-    "contact_attraction",
-    "heap",
-    "plate",
-    "max_grains",
-    "rest_energy",
-    "steady_every",
-    "steady_tolerance",
-    "packing",
-    "tilt",
-    "rate",
-    "flux",
-    "insertions",
-    "max_wait",
-    "equilibrium",
-    "hold",
-    "max_fill_time",
-    "free_run",
-    "grain",
-    "position",
-    "velocity",
-    "angular_velocity",
-    "time",
-    "incline",
-    "angle",
-];
+/// The keys of a table, as its defaults spell them.
+fn keys_of(v: &Value) -> Vec<String> {
+    v.as_object()
+        .map(|o| o.keys().cloned().collect())
+        .unwrap_or_default()
+}
 
-const PROTOCOLS: &[&str] = &[
-    "fill_release",
-    "tilt",
-    "flux",
-    "free_run",
-    "heap",
-    "packing",
-    "fill_release",
-    "heap",
-    "nothing",
-];
+/// Every section the registered protocols and models declare, by key.
+fn sections() -> Vec<String> {
+    let protocols = registry::protocols().iter().flat_map(|p| p.sections());
+    let models = registry::MODELS.iter().flat_map(|m| m.sections());
+    let mut keys: Vec<String> = protocols.chain(models).map(|d| d.key.into()).collect();
+    keys.push("numerics".into());
+    keys.sort();
+    keys.dedup();
+    keys
+}
+
+/// Keys the scene knows, from the registries (the core, every declared
+/// section and every key of their defaults, the fields of listed grains
+/// and walls), so that documents reach the checks behind the first
+/// unknown key.
+fn known_keys() -> Vec<String> {
+    let protocols = registry::protocols().iter().flat_map(|p| p.sections());
+    let models = registry::MODELS.iter().flat_map(|m| m.sections());
+    let mut keys: Vec<String> = protocols
+        .chain(models)
+        .flat_map(|d| {
+            let mut k = keys_of(&d.defaults());
+            k.push(d.key.into());
+            k
+        })
+        .collect();
+    keys.extend(keys_of(&serde_json::to_value(Numerics::default()).unwrap()));
+    let core = [
+        "protocol",
+        "seed",
+        "preset",
+        "model",
+        "dimension",
+        "gravity",
+        "rng",
+    ];
+    let listed = [
+        "particles",
+        "walls",
+        "duration",
+        "position",
+        "velocity",
+        "radius",
+    ];
+    let more = [
+        "angular_velocity",
+        "load",
+        "point",
+        "normal",
+        "limits",
+        "axis",
+        "threads",
+    ];
+    keys.extend(
+        core.iter()
+            .chain(&listed)
+            .chain(&more)
+            .map(|k| k.to_string()),
+    );
+    keys.sort();
+    keys.dedup();
+    keys
+}
+
+/// Protocol names: every registered one, and one that is not.
+fn protocols() -> Vec<String> {
+    let mut names: Vec<String> = registry::protocol_names()
+        .into_iter()
+        .map(String::from)
+        .collect();
+    names.push("nothing".into());
+    names
+}
 
 fn key() -> impl Strategy<Value = String> {
     prop_oneof![
-        8 => prop::sample::select(KEYS).prop_map(String::from),
+        8 => prop::sample::select(known_keys()),
         1 => "[a-z_.]{0,12}",
         1 => any::<String>(),
     ]
@@ -146,7 +139,7 @@ fn leaf() -> impl Strategy<Value = Value> {
             ][..]
         )
         .prop_map(|s| Value::String(s.into())),
-        prop::sample::select(PROTOCOLS).prop_map(|s| Value::String(s.into())),
+        prop::sample::select(protocols()).prop_map(Value::String),
         any::<String>().prop_map(Value::String),
     ]
 }
@@ -164,26 +157,11 @@ fn document() -> impl Strategy<Value = Value> {
 /// Sections as tables of known keys with random values: these get past
 /// the unknown-key check to the value checks of each section.
 fn structured() -> impl Strategy<Value = Value> {
-    let section = prop::collection::vec((prop::sample::select(KEYS), leaf()), 0..6)
-        .prop_map(|kv| Value::Object(kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect()));
-    const SECTIONS: &[&str] = &[
-        "numerics",
-        "contact",
-        "box",
-        "grains",
-        "material",
-        "heap",
-        "packing",
-        "tilt",
-        "flux",
-        "equilibrium",
-        "free_run",
-        "incline",
-    ];
+    let section = prop::collection::vec((prop::sample::select(known_keys()), leaf()), 0..6)
+        .prop_map(|kv| Value::Object(kv.into_iter().collect()));
     prop::collection::vec(
         prop_oneof![
-            3 => (prop::sample::select(SECTIONS), section)
-                .prop_map(|(k, v)| (k.to_string(), v)),
+            3 => (prop::sample::select(sections()), section),
             1 => (prop::sample::select(&["seed", "preset", "gravity", "model", "dimension"][..]),
                 leaf()).prop_map(|(k, v)| (k.to_string(), v)),
         ],
@@ -195,13 +173,13 @@ fn structured() -> impl Strategy<Value = Value> {
 /// A top-level document: usually a table with a protocol.
 fn scene_document() -> impl Strategy<Value = Value> {
     let body = prop_oneof![3 => structured(), 1 => document()];
-    (prop::sample::select(PROTOCOLS), body, 0..10u8).prop_map(|(p, d, with)| {
+    (prop::sample::select(protocols()), body, 0..10u8).prop_map(|(p, d, with)| {
         let mut m = match d {
             Value::Object(m) => m,
             other => [("numerics".to_string(), other)].into_iter().collect(),
         };
         if with > 0 {
-            m.insert("protocol".into(), Value::String(p.into()));
+            m.insert("protocol".into(), Value::String(p));
         }
         Value::Object(m)
     })
@@ -209,7 +187,7 @@ fn scene_document() -> impl Strategy<Value = Value> {
 
 fn overrides() -> impl Strategy<Value = Vec<String>> {
     let assignment = (
-        prop::collection::vec(prop::sample::select(KEYS), 1..4),
+        prop::collection::vec(prop::sample::select(known_keys()), 1..4),
         prop_oneof![
             leaf().prop_map(|v| v.to_string()),
             "[ -~]{0,12}",
