@@ -122,7 +122,7 @@ impl Scales {
     }
 }
 
-/// Grains at rest (`engine::RestRule`): a grain that has stayed slower than
+/// Grains at rest (`repose_engine::simulation::RestRule`): a grain that has stayed slower than
 /// `speed` for `time` is no longer integrated until a faster grain touches
 /// it. Off unless `speed` is above zero.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
