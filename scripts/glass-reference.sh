@@ -5,11 +5,14 @@
 #
 #   cargo build --release && scripts/glass-reference.sh [SWEEP.toml ...]
 #
-# A heap of glass costs 10¹⁰–10¹¹ particle-steps (minutes to an hour on one
+# A heap of glass costs 10¹⁰–10¹¹ particle-steps (minutes to hours on one
 # core), so the runs go through the queue: samples checkpoint every few
 # minutes, and running the script again after an interruption continues
 # the sweeps already queued in the store (data/glass/glass.db) from their
-# checkpoints instead of queueing them anew.
+# checkpoints instead of queueing them anew. While a sweep in it is
+# unfinished the store is kept in the repository (a copy made by `repose
+# backup` after the server has stopped), so a heap longer than one sitting
+# goes on from its last checkpoint on the next machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPOSE=${REPOSE:-$PWD/target/release/repose}
