@@ -11,9 +11,10 @@
 //!
 //! The bytes are [postcard](https://docs.rs/postcard) (floats as their
 //! eight bytes, so nothing is rounded) with a header naming the format,
-//! the engine build, the engine variant (contact law and integrator), the
-//! protocol and the seed. A checkpoint whose header does not match is set
-//! aside and the run starts over.
+//! the engine build, the engine variant (contact law and integrator, by
+//! their type names without module paths, so that moving a type to another
+//! module keeps its checkpoints), the protocol and the seed. A checkpoint
+//! whose header does not match is set aside and the run starts over.
 
 use crate::report::{Phase, TracePoint};
 use serde::{Deserialize, Serialize};
@@ -47,7 +48,7 @@ impl Header {
         Header {
             format: FORMAT,
             engine: crate::report::ENGINE.to_string(),
-            variant: variant.to_string(),
+            variant: bare(variant),
             protocol: protocol.to_string(),
             seed,
         }
@@ -116,6 +117,10 @@ where
 {
     let (found, _): (Header, _) =
         postcard::take_from_bytes(bytes).map_err(|e| format!("unreadable checkpoint: {e}"))?;
+    let found = Header {
+        variant: bare(&found.variant),
+        ..found
+    };
     if &found != header {
         return Err(format!(
             "the checkpoint was written by another build or scene ({} {} {} seed {}, format {})",
@@ -123,4 +128,74 @@ where
         ));
     }
     postcard::from_bytes(bytes).map_err(|e| format!("unreadable checkpoint: {e}"))
+}
+
+/// A type name without its module paths: `a::b::Law<c::N, true>` becomes
+/// `Law<N, true>`.
+fn bare(type_name: &str) -> String {
+    let mut out = String::with_capacity(type_name.len());
+    let mut word = String::new();
+    let mut chars = type_name.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == ':' && chars.peek() == Some(&':') {
+            chars.next();
+            word.clear();
+        } else if c.is_alphanumeric() || c == '_' {
+            word.push(c);
+        } else {
+            out.push_str(&word);
+            word.clear();
+            out.push(c);
+        }
+    }
+    out.push_str(&word);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_variant_is_named_without_module_paths() {
+        let old = "repose_physics::contact::Pairwise<repose_physics::contact::viscoelastic::\
+                   ViscoelasticHertz, repose_physics::contact::rolling::Epsd2, true>, \
+                   repose_physics::integrate::VelocityVerlet";
+        let moved = "repose_engine::contact::Pairwise<repose_engine::contact::viscoelastic::\
+                     ViscoelasticHertz, repose_engine::contact::rolling::Epsd2, true>, \
+                     repose_engine::integrate::VelocityVerlet";
+        let bare_old = bare(old);
+        assert_eq!(
+            bare_old,
+            "Pairwise<ViscoelasticHertz, Epsd2, true>, VelocityVerlet"
+        );
+        assert_eq!(bare(moved), bare_old);
+        let other = "repose_engine::contact::Pairwise<repose_engine::contact::viscoelastic::\
+                     ViscoelasticHertz, repose_engine::contact::NoRolling, true>, \
+                     repose_engine::integrate::VelocityVerlet";
+        assert_ne!(bare(other), bare_old);
+    }
+
+    #[test]
+    fn a_checkpoint_of_a_moved_law_is_read_and_one_of_another_law_is_not() {
+        let saved = |variant: &str| Saved {
+            header: Header {
+                format: FORMAT,
+                engine: crate::report::ENGINE.to_string(),
+                variant: variant.to_string(),
+                protocol: "heap".into(),
+                seed: 3,
+            },
+            engine: 1.5f64,
+            trace: Vec::new(),
+            wall_time: 0.0,
+            protocol: 7u32,
+        };
+        let bytes = encode(&saved("old::path::Law<old::A>, old::Verlet")).unwrap();
+        let here = Header::new("new::path::Law<new::A>, new::Verlet", "heap", 3);
+        let back: Saved<f64, u32> = decode(&bytes, &here).unwrap();
+        assert_eq!((back.engine, back.protocol), (1.5, 7));
+        let elsewhere = Header::new("new::path::Law<new::B>, new::Verlet", "heap", 3);
+        assert!(decode::<f64, u32>(&bytes, &elsewhere).is_err());
+    }
 }
