@@ -116,23 +116,18 @@ where
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
         let contacts = &mut self.wall_contacts;
-        let mut pass = WallPass::default();
-        for (w, wall) in self.walls.iter().enumerate() {
-            let mine = (&contacts.candidates[w][..], &mut contacts.history[w][..]);
-            let out = (&mut force[..], &mut torque[..], 0);
-            let law = &self.wall_laws[w];
-            pass = pass.join(wall_pass(
-                law,
-                (w, wall),
-                &self.particles,
-                mine,
-                out,
-                self.dt,
-            ));
-            if pass.through.is_some() {
-                break;
-            }
-        }
+        let mine = contacts
+            .candidates
+            .iter()
+            .zip(contacts.history.iter_mut())
+            .map(|(c, h)| (&c[..], &mut h[..]));
+        let pass = walls_pass(
+            (&self.walls, &self.wall_laws),
+            &self.particles,
+            mine,
+            (&mut force[..], &mut torque[..], 0),
+            self.dt,
+        );
         self.particles.force = force;
         self.particles.torque = torque;
         self.finish_walls(pass)
@@ -206,12 +201,38 @@ impl WallPass {
     }
 }
 
+/// Every wall in order against its candidate grains (each with its
+/// contact history), added into `out = (force, torque, first)` as
+/// [`wall_pass`] does; stops at the first grain found past a wall.
+#[inline(always)]
+pub(super) fn walls_pass<'h, const D: usize, L: ContactLaw<D>>(
+    (walls, laws): (&[Wall<D>], &[L]),
+    p: &Particles<D>,
+    contacts: impl Iterator<Item = (&'h [u32], &'h mut [L::History])>,
+    (force, torque, first): (&mut [Vector<D>], &mut [Angular<D>], usize),
+    dt: f64,
+) -> WallPass
+where
+    Dim<D>: Space<D>,
+    L::History: 'h,
+{
+    let mut pass = WallPass::default();
+    for (w, ((wall, law), mine)) in walls.iter().zip(laws).zip(contacts).enumerate() {
+        let out = (&mut *force, &mut *torque, first);
+        pass = pass.join(wall_pass(law, (w, wall), p, mine, out, dt));
+        if pass.through.is_some() {
+            break;
+        }
+    }
+    pass
+}
+
 /// The candidate grains of wall `w` (ascending, each with its contact
 /// history) against it: each contact's force and torque is added at
 /// `grain − first` of `out = (force, torque, first)`; the pass stops at
 /// the first grain found past the plane.
 #[inline(always)]
-pub(super) fn wall_pass<const D: usize, L: ContactLaw<D>>(
+fn wall_pass<const D: usize, L: ContactLaw<D>>(
     law: &L,
     (w, wall): (usize, &Wall<D>),
     p: &Particles<D>,

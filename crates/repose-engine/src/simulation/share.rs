@@ -17,7 +17,7 @@
 //!    adds them after every pair. A step so makes two passes over the pool,
 //!    not one for the pairs and another for the walls.
 
-use super::forces::{pair_response, wall_pass, worse, Angular, WallPass};
+use super::forces::{pair_response, walls_pass, worse, Angular, WallPass};
 use super::rest::Wake;
 use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response};
@@ -374,24 +374,14 @@ where
 
     /// A share's grains against every wall, walls in order.
     fn wall_contacts(&self, share: &Share, piece: &mut Piece<'_, D, L::History>) -> WallPass {
-        let mut pass = WallPass::default();
-        let first = share.grains.start;
-        for (w, (wall, (cands, history))) in self.walls.iter().zip(&mut piece.walls).enumerate() {
-            let out = (&mut *piece.force, &mut *piece.torque, first);
-            let law = &self.wall_laws[w];
-            pass = pass.join(wall_pass(
-                law,
-                (w, wall),
-                self.p,
-                (cands, history),
-                out,
-                self.dt,
-            ));
-            if pass.through.is_some() {
-                break;
-            }
-        }
-        pass
+        let mine = piece.walls.iter_mut().map(|(c, h)| (*c, &mut **h));
+        walls_pass(
+            (self.walls, self.wall_laws),
+            self.p,
+            mine,
+            (&mut *piece.force, &mut *piece.torque, share.grains.start),
+            self.dt,
+        )
     }
 }
 
