@@ -13,9 +13,8 @@ pub struct Quantity {
     pub f: fn(&Map<String, Value>) -> Option<f64>,
 }
 
-/// The value of `x` at a point: the axis of that name, or a paper's
-/// quantity of that name computed from the point's axes (a paper's
-/// `quantities`).
+/// The value of `x` at a point: the axis of that name, or the quantity of
+/// that name among `quantities` (a paper's), computed from the point's axes.
 pub fn x_value(point: &Map<String, Value>, x: &str, quantities: &[Quantity]) -> Option<f64> {
     if let Some(v) = point.get(x) {
         return v.as_f64();

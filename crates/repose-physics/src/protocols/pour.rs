@@ -122,9 +122,9 @@ impl Scales {
     }
 }
 
-/// Grains at rest (`repose_engine::simulation::RestRule`): a grain that has stayed slower than
-/// `speed` for `time` is no longer integrated until a faster grain touches
-/// it. Off unless `speed` is above zero.
+/// Grains at rest (`repose_engine::simulation::RestRule`): a grain that has
+/// stayed slower than `speed` for `time` is no longer integrated until a
+/// faster grain touches it. Off unless `speed` is above zero.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RestSpec {

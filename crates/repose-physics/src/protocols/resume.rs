@@ -133,23 +133,15 @@ where
 /// A type name without its module paths: `a::b::Law<c::N, true>` becomes
 /// `Law<N, true>`.
 fn bare(type_name: &str) -> String {
-    let mut out = String::with_capacity(type_name.len());
-    let mut word = String::new();
-    let mut chars = type_name.chars().peekable();
-    while let Some(c) = chars.next() {
-        if c == ':' && chars.peek() == Some(&':') {
-            chars.next();
-            word.clear();
-        } else if c.is_alphanumeric() || c == '_' {
-            word.push(c);
-        } else {
-            out.push_str(&word);
-            word.clear();
-            out.push(c);
-        }
-    }
-    out.push_str(&word);
-    out
+    let parts: Vec<&str> = type_name.split("::").collect();
+    let Some((last, paths)) = parts.split_last() else {
+        return String::new();
+    };
+    // Each part before a `::` ends with the module it names: drop it.
+    let kept = paths
+        .iter()
+        .map(|p| p.trim_end_matches(|c: char| c.is_alphanumeric() || c == '_'));
+    kept.chain([*last]).collect()
 }
 
 #[cfg(test)]
