@@ -74,7 +74,7 @@ const OPTIONS: &[(&str, &[&str])] = &[
 
 /// What the `× base` columns of an option table mean.
 pub(crate) const AGAINST_BASE: &str =
-    "(× base: cost per particle-step relative to the baseline; above 1 is slower";
+    "× base: cost per particle-step relative to the baseline; above 1 is slower";
 
 /// An option's rates in its two phases (M particle-steps/s), each with its
 /// cost against the first option's (`base`, set by the first call).
@@ -114,7 +114,7 @@ fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         let phases = throughput(&scene, scale(50_000), scale(20_000))?;
         println!("{label:<52} {}", against_base(&phases, &mut base));
     }
-    println!("{AGAINST_BASE})");
+    println!("({AGAINST_BASE})");
     Ok(ExitCode::SUCCESS)
 }
 

@@ -89,7 +89,7 @@ fn options(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         let costs = against_base(&phases, &mut base);
         println!("{label:<50} {costs} {contacts:>9.2}");
     }
-    println!("{AGAINST_BASE};");
+    println!("({AGAINST_BASE};");
     println!(
         " contacts: grain-grain contacts per grain in the settled heap, which each option shapes)"
     );
