@@ -5,7 +5,7 @@
 
 use proptest::prelude::*;
 use repose_physics::registry;
-use repose_physics::scene::Numerics;
+use repose_physics::scene::{Numerics, SectionDecl};
 use repose_physics::Scene;
 use serde_json::{Map, Value};
 
@@ -16,11 +16,16 @@ fn keys_of(v: &Value) -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// Every section the registered protocols and models declare, by key.
-fn sections() -> Vec<String> {
+/// Every section the registered protocols and models declare.
+fn declared() -> Vec<SectionDecl> {
     let protocols = registry::protocols().iter().flat_map(|p| p.sections());
     let models = registry::MODELS.iter().flat_map(|m| m.sections());
-    let mut keys: Vec<String> = protocols.chain(models).map(|d| d.key.into()).collect();
+    protocols.chain(models).collect()
+}
+
+/// Every declared section, by key.
+fn sections() -> Vec<String> {
+    let mut keys: Vec<String> = declared().iter().map(|d| d.key.into()).collect();
     keys.push("numerics".into());
     keys.sort();
     keys.dedup();
@@ -32,10 +37,8 @@ fn sections() -> Vec<String> {
 /// and walls), so that documents reach the checks behind the first
 /// unknown key.
 fn known_keys() -> Vec<String> {
-    let protocols = registry::protocols().iter().flat_map(|p| p.sections());
-    let models = registry::MODELS.iter().flat_map(|m| m.sections());
-    let mut keys: Vec<String> = protocols
-        .chain(models)
+    let mut keys: Vec<String> = declared()
+        .iter()
         .flat_map(|d| {
             let mut k = keys_of(&d.defaults());
             k.push(d.key.into());
