@@ -22,8 +22,8 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         return String::new();
     };
     let up = r.dimension.max(1) - 1;
-    let cell = &r.scene.sections.get("box");
-    let num = |k: &str| cell.and_then(|b| b[k].as_f64()).unwrap_or(0.0);
+    let cell = r.scene.sections.value("box");
+    let num = |k: &str| cell.as_ref().and_then(|b| b[k].as_f64()).unwrap_or(0.0);
     let width = num("width");
     let grains = &state.grains;
     let (mut xmin, mut xmax, mut ymax) = (0.0f64, width, 0.0f64);

@@ -24,7 +24,7 @@ pub fn svg(r: &RunReport) -> String {
     let half_plate = r
         .scene
         .sections
-        .get("heap")
+        .value("heap")
         .and_then(|h| h["plate"].as_f64())
         .unwrap_or(0.0)
         * 0.5

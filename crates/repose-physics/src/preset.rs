@@ -70,7 +70,7 @@ mod tests {
         .unwrap();
         assert_eq!(s.numerics.integrator.name(), "gear5");
         assert_eq!(s.numerics.dt_factor, 0.05);
-        assert_eq!(s.sections["equilibrium"]["hold"], 0.05);
+        assert_eq!(s.sections.value("equilibrium").unwrap()["hold"], 0.05);
     }
 
     #[test]

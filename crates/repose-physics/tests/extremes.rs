@@ -180,7 +180,7 @@ fn tilt_rates_fast_and_slow() {
     for rate in ["tilt.rate=1", "tilt.rate=100"] {
         let r = run_scene(SMALL, &["protocol=tilt", rate]);
         assert_clean(&r, rate);
-        let tilt: TiltSpec = r.scene.section().unwrap();
+        let tilt: &TiltSpec = r.scene.section().unwrap();
         if let Some(t) = r.metric("theta_t") {
             assert!(t <= tilt.max_angle + 1.0, "{t}");
         }
@@ -267,7 +267,7 @@ impl<L: ContactLaw<2>, I: Integrator<2>> ProbeSim for Simulation<2, L, I> {
 fn tens_of_thousands_of_grains() {
     // 40 × 20 cm at the default packing: 20 000 grains.
     let big = scene(SMALL, &["box.width=40", "box.height=20"]).resolved();
-    let cell: BoxSpec = big.section().unwrap();
+    let cell: &BoxSpec = big.section().unwrap();
     assert_eq!(cell.grain_count(&big), 20_000);
     let (n, pairs, finite) = with_engine(
         &big,
@@ -286,7 +286,7 @@ fn tens_of_thousands_of_grains() {
 #[test]
 fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
     let s = scene(SMALL, &[]).resolved();
-    let cell: BoxSpec = s.section().unwrap();
+    let cell: &BoxSpec = s.section().unwrap();
     let extent = 2.0 * (cell.width + cell.fill_height());
     let outcome = with_engine(
         &s,

@@ -414,9 +414,9 @@ mod tests {
         assert_eq!(jobs[3].seed, 103);
         // standard preset: Verlet; the resolved scene carries its time step
         assert_eq!(jobs[0].scene.numerics.integrator.name(), "verlet");
-        assert_eq!(jobs[4].scene.sections["contact"]["mu"], 0.2);
-        assert_eq!(jobs[23].scene.sections["box"]["width"], 3.0);
-        assert_eq!(jobs[23].scene.sections["box"]["height"], 2.0);
+        assert_eq!(jobs[4].scene.sections.value("contact").unwrap()["mu"], 0.2);
+        assert_eq!(jobs[23].scene.sections.value("box").unwrap()["width"], 3.0);
+        assert_eq!(jobs[23].scene.sections.value("box").unwrap()["height"], 2.0);
         assert!(jobs[0].scene.numerics.dt.is_some());
         let hashes: std::collections::HashSet<_> = jobs.iter().map(|j| &j.sample_hash).collect();
         assert_eq!(hashes.len(), 24);

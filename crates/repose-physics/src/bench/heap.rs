@@ -88,7 +88,7 @@ pub fn heap_throughput(
 ) -> Result<Vec<PhaseThroughput>, SceneError> {
     scene.validate()?;
     let scene = scene.resolved();
-    let grains: Grains = scene.section()?;
+    let grains = scene.section::<Grains>()?.clone();
     with_engine::<3, _>(
         &scene,
         Job {

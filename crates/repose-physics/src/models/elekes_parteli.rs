@@ -342,7 +342,7 @@ impl Material {
             return;
         };
         let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let y = self.modulus(&grains, g);
+        let y = self.modulus(grains, g);
         let e = self.restitution_at(y);
         if y > 0.0 && e >= 1.0 {
             c.fail(
@@ -571,11 +571,10 @@ pub fn law<R: Build<Parts>, C: Build<Parts>, const ROT: bool>(p: &Parts) -> Law<
 
 /// The grains and the material as simulated.
 pub fn material(scene: &Scene) -> Result<(Grains, Material), SceneError> {
-    let grains: Grains = scene.section()?;
-    let m: Material = scene.section()?;
+    let grains: &Grains = scene.section()?;
+    let m: &Material = scene.section()?;
     let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let m = m.effective(&grains, g);
-    Ok((grains, m))
+    Ok((grains.clone(), m.effective(grains, g)))
 }
 
 /// The grain–grain and grain–plate parts of a scene, each kind of contact
@@ -686,13 +685,15 @@ impl Model for ElekesParteli {
 
     /// Writes out the modulus simulated.
     fn resolve(&self, scene: &mut Scene) {
-        let (Ok(grains), Ok(mut m)) = (scene.section::<Grains>(), scene.section::<Material>())
-        else {
+        let (Ok(grains), Ok(m)) = (scene.section::<Grains>(), scene.section::<Material>()) else {
             return;
         };
         let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
-        m.youngs_modulus = Some(m.modulus(&grains, g));
-        scene.set_section(&m);
+        let m = Material {
+            youngs_modulus: Some(m.modulus(grains, g)),
+            ..m.clone()
+        };
+        scene.set_section(m);
     }
 
     /// The shorter of the grain–grain and grain–plate Hertz collision times
@@ -719,7 +720,7 @@ impl Model for ElekesParteli {
     }
 
     fn options(&self, scene: &Scene) -> BTreeMap<String, String> {
-        let m = scene.section::<Material>().unwrap_or_default();
+        let m = scene.section::<Material>().cloned().unwrap_or_default();
         let name = |v: serde_json::Value| v.as_str().unwrap_or_default().to_string();
         let on = |b: bool, what: &str| {
             if b {

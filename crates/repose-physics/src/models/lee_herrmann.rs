@@ -226,15 +226,15 @@ impl Section for WallContactSpec {
     }
 }
 
-/// The three sections of a scene, read once.
-struct Material {
-    grains: GrainSpec,
-    contact: ContactSpec,
-    wall: WallContactSpec,
+/// The three sections of a scene.
+struct Material<'a> {
+    grains: &'a GrainSpec,
+    contact: &'a ContactSpec,
+    wall: &'a WallContactSpec,
 }
 
-impl Material {
-    fn of(scene: &Scene) -> Result<Material, SceneError> {
+impl Material<'_> {
+    fn of(scene: &Scene) -> Result<Material<'_>, SceneError> {
         Ok(Material {
             grains: scene.section()?,
             contact: scene.section()?,
@@ -409,20 +409,21 @@ impl Model for LeeHerrmann {
     fn check(&self, _scene: &Scene, _c: &mut Checks) {}
 
     fn resolve(&self, scene: &mut Scene) {
-        let (Ok(mut contact), Ok(mut wall)) = (
+        let (Ok(contact), Ok(wall)) = (
             scene.section::<ContactSpec>(),
             scene.section::<WallContactSpec>(),
         ) else {
             return;
         };
+        let (mut contact, mut wall) = (contact.clone(), wall.clone());
         let gamma_s = contact.gamma_s();
         wall.gamma_n = Some(wall.gamma_n.unwrap_or(contact.gamma_n));
         wall.k_s = Some(wall.k_s.unwrap_or(contact.k_s));
         wall.gamma_s = Some(wall.gamma_s.unwrap_or(gamma_s));
         wall.mu = Some(wall.mu.unwrap_or(contact.mu));
         contact.gamma_s = Some(gamma_s);
-        scene.set_section(&contact);
-        scene.set_section(&wall);
+        scene.set_section(contact);
+        scene.set_section(wall);
     }
 
     /// Shortest contact duration among grain–grain and grain–wall contacts
@@ -453,7 +454,7 @@ impl Model for LeeHerrmann {
     }
 
     fn options(&self, scene: &Scene) -> BTreeMap<String, String> {
-        let c = scene.section::<ContactSpec>().unwrap_or_default();
+        let c = scene.section::<ContactSpec>().cloned().unwrap_or_default();
         let name = |v: serde_json::Value| v.as_str().unwrap_or_default().to_string();
         BTreeMap::from([
             ("normal_force".to_string(), name(json!(c.normal_force))),

@@ -118,7 +118,7 @@ impl Protocol for Flux {
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
         let spec = PileSpec::of(scene)?;
-        let flux = scene.section()?;
+        let flux = scene.section::<FluxSpec>()?.clone();
         models::with_engine::<2, _>(
             scene,
             Job {

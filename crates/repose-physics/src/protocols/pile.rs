@@ -241,20 +241,21 @@ pub fn check(scene: &Scene, filled: bool, c: &mut Checks) {
         return;
     }
     if let (Ok(b), Ok(g)) = (scene.section::<BoxSpec>(), scene.section::<GrainSpec>()) {
-        b.check_capacity(scene, &g, filled, c);
+        b.check_capacity(scene, g, filled, c);
     }
 }
 
 /// Writes out the grain count and the height an aspect ratio gives.
 pub fn resolve(scene: &mut Scene) {
-    let Ok(mut b) = scene.section::<BoxSpec>() else {
+    let Ok(b) = scene.section::<BoxSpec>() else {
         return;
     };
+    let mut b = b.clone();
     if scene.particles.is_empty() {
         b.grains = Some(b.grain_count(scene));
     }
     b.height = b.fill_height();
-    scene.set_section(&b);
+    scene.set_section(b);
 }
 
 /// The sections a pile scene is read from, once.
@@ -267,11 +268,11 @@ pub struct PileSpec {
 
 impl PileSpec {
     pub fn of(scene: &Scene) -> Result<PileSpec, SceneError> {
-        let contact: crate::models::lee_herrmann::ContactSpec = scene.section()?;
+        let contact: &crate::models::lee_herrmann::ContactSpec = scene.section()?;
         Ok(PileSpec {
-            cell: scene.section()?,
-            eq: scene.section()?,
-            grains: scene.section()?,
+            cell: scene.section::<BoxSpec>()?.clone(),
+            eq: scene.section::<Equilibrium>()?.clone(),
+            grains: scene.section::<GrainSpec>()?.clone(),
             mu: contact.mu,
         })
     }

@@ -61,8 +61,8 @@ macro_rules! poured_protocol {
         }
 
         fn impact_speed(&self, scene: &$crate::scene::Scene) -> Option<f64> {
-            let spec: $spec = scene.section().ok()?;
-            let grains: $crate::models::elekes_parteli::Grains = scene.section().ok()?;
+            let spec: &$spec = scene.section().ok()?;
+            let grains: &$crate::models::elekes_parteli::Grains = scene.section().ok()?;
             $crate::protocols::pour::fall_speed(scene, spec.height * grains.diameter)
         }
     };
@@ -84,9 +84,9 @@ impl<'a, S: Section> PourJob<'a, S> {
     pub fn of(scene: &'a Scene, observer: &'a mut dyn Observer) -> Result<Self, SceneError> {
         Ok(PourJob {
             scene,
-            spec: scene.section()?,
+            spec: scene.section::<S>()?.clone(),
             scales: Scales::of(scene)?,
-            grains: scene.section()?,
+            grains: scene.section::<Grains>()?.clone(),
             observer,
         })
     }
@@ -105,7 +105,7 @@ pub struct Scales {
 
 impl Scales {
     pub fn of(scene: &Scene) -> Result<Scales, SceneError> {
-        let grains: Grains = scene.section()?;
+        let grains: &Grains = scene.section()?;
         let d = grains.diameter;
         let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
         Ok(Scales {
@@ -178,7 +178,7 @@ impl RestSpec {
         scales: &Scales,
         sim: &mut Simulation<3, L, I>,
     ) {
-        let spec: RestSpec = scene.section().unwrap_or_default();
+        let spec = scene.section::<RestSpec>().cloned().unwrap_or_default();
         if spec.speed > 0.0 {
             let steps = (spec.time * scales.time / sim.dt)
                 .ceil()

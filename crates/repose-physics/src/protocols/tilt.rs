@@ -101,7 +101,7 @@ impl Protocol for Tilt {
             scene,
             spec: PileSpec::of(scene)?,
             observer,
-            after: scene.section::<TiltSpec>()?,
+            after: scene.section::<TiltSpec>()?.clone(),
         };
         models::with_engine::<2, _>(scene, job)
     }

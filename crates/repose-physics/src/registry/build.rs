@@ -10,9 +10,10 @@ use crate::models::Model;
 use crate::preset::Preset;
 use crate::protocols::Protocol;
 use crate::scene::checks::path_error;
-use crate::scene::{Checks, Core, Scene, SceneError, SectionDecl, CORE_KEYS, MAX_DT_FACTOR};
+use crate::scene::{
+    Checks, Core, Scene, SceneError, SectionDecl, Sections, CORE_KEYS, MAX_DT_FACTOR,
+};
 use serde_json::Value;
-use std::collections::BTreeMap;
 
 impl Scene {
     /// Parses a TOML document — or a JSON one (text starting with `{`) —
@@ -289,23 +290,20 @@ fn sections_of(
     mut rest: Doc,
     protocol: &dyn Protocol,
     model: &dyn Model,
-) -> Result<BTreeMap<String, Value>, SceneError> {
+) -> Result<Sections, SceneError> {
     let decls: Vec<SectionDecl> = model
         .sections()
         .into_iter()
         .chain(protocol.sections())
         .collect();
     let mut errors = Checks::default();
-    let mut out = BTreeMap::new();
+    let mut out = Sections::default();
     for decl in &decls {
         let value = rest
             .remove(decl.key)
             .unwrap_or_else(|| Value::Object(Doc::new()));
-        match (decl.normalize)(decl.key, value) {
-            Ok(v) => {
-                out.insert(decl.key.to_string(), v);
-            }
-            Err(e) => errors.extend(e),
+        if let Err(e) = decl.parse_into(value, &mut out) {
+            errors.extend(e);
         }
     }
     for key in rest.keys() {
@@ -369,11 +367,11 @@ mod tests {
     fn smallest_scene_takes_the_papers_defaults() {
         let s = Scene::from_toml("protocol = \"fill_release\"", &[]).unwrap();
         assert_eq!((s.model.as_str(), s.dimension), ("lee_herrmann", 2));
-        let contact: ContactSpec = s.section().unwrap();
+        let contact: &ContactSpec = s.section().unwrap();
         assert_eq!(contact.k_n, 1e6);
         assert_eq!(contact.gamma_s(), 5.0);
         let r = s.resolved();
-        let wall: WallContactSpec = r.section().unwrap();
+        let wall: &WallContactSpec = r.section().unwrap();
         assert_eq!((wall.k_n, wall.mu), (2e6, Some(0.2)));
         assert_eq!(r.section::<BoxSpec>().unwrap().grains, Some(400));
         assert_eq!(r.gravity, vec![0.0, -981.0]);

@@ -30,9 +30,13 @@ use repose_engine::integrate::Scheme;
 use repose_engine::particles::Grain;
 use repose_engine::walls::WallSpec;
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Serialize, Serializer};
 use serde_json::Value;
+use std::any::Any;
 use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
 
 /// The pseudo-random generator behind placement and radii.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -72,9 +76,10 @@ pub struct Scene {
     /// Simulated time of a `free_run`, s.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub duration: Option<f64>,
-    /// The protocol's and the model's sections, each complete with its defaults.
+    /// The protocol's and the model's sections, each complete with its
+    /// defaults and parsed into its own type once, when the scene is built.
     #[serde(flatten)]
-    pub sections: BTreeMap<String, Value>,
+    pub sections: Sections,
 }
 
 /// The core of a scene document, as written.
@@ -168,7 +173,9 @@ impl Default for Numerics {
 /// A part of the scene document owned by a protocol or a model: its own
 /// table (`[tilt]`, `[contact]`, …) with defaults for every key and checks
 /// that name the fields they reject.
-pub trait Section: Serialize + DeserializeOwned + Default {
+pub trait Section:
+    Serialize + DeserializeOwned + Default + Clone + fmt::Debug + Send + Sync + 'static
+{
     /// The table's key in the scene document.
     const KEY: &'static str;
     /// One line on what the section holds.
@@ -177,12 +184,84 @@ pub trait Section: Serialize + DeserializeOwned + Default {
     fn check(&self, scene: &Scene, c: &mut Checks);
 }
 
+/// A section's value as a scene holds it, whatever its type.
+trait Held: Any + Send + Sync + fmt::Debug {
+    fn to_value(&self) -> Value;
+    fn as_any(&self) -> &dyn Any;
+}
+
+impl<T: Section> Held for T {
+    fn to_value(&self) -> Value {
+        serde_json::to_value(self).unwrap_or(Value::Null)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// A scene's sections, each held as its own type under its key. Cloning a
+/// scene shares them; replacing one ([`Scene::set_section`]) leaves the
+/// other clones as they were.
+#[derive(Clone, Default)]
+pub struct Sections(BTreeMap<&'static str, Arc<dyn Held>>);
+
+impl Sections {
+    /// Whether the scene has the section `key`.
+    pub fn contains_key(&self, key: &str) -> bool {
+        self.0.contains_key(key)
+    }
+
+    /// The keys of the sections held, in order.
+    pub fn keys(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.0.keys().copied()
+    }
+
+    /// The section `key` as a document (for reading by name, as the
+    /// command line's tables do).
+    pub fn value(&self, key: &str) -> Option<Value> {
+        self.0.get(key).map(|s| s.to_value())
+    }
+
+    fn get<T: Section>(&self) -> Option<&T> {
+        self.0.get(T::KEY)?.as_any().downcast_ref()
+    }
+}
+
+impl Serialize for Sections {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (key, section) in &self.0 {
+            map.serialize_entry(key, &section.to_value())?;
+        }
+        map.end()
+    }
+}
+
+impl PartialEq for Sections {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.len() == other.0.len()
+            && self.0.iter().zip(&other.0).all(|((k, a), (l, b))| {
+                k == l && (Arc::ptr_eq(a, b) || a.to_value() == b.to_value())
+            })
+    }
+}
+
+impl fmt::Debug for Sections {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_map().entries(&self.0).finish()
+    }
+}
+
+/// Parses a section's table (under its key) into its own type.
+type Parse = fn(&str, Value) -> Result<Arc<dyn Held>, SceneError>;
+
 /// A section as the registry sees it, whatever its type.
 #[derive(Clone, Copy)]
 pub struct SectionDecl {
     pub key: &'static str,
     pub about: &'static str,
-    pub(crate) normalize: fn(&str, Value) -> Result<Value, SceneError>,
+    parse: Parse,
     pub(crate) check: fn(&Scene, &mut Checks),
 }
 
@@ -191,7 +270,7 @@ impl SectionDecl {
         SectionDecl {
             key: T::KEY,
             about: T::ABOUT,
-            normalize: |key, value| {
+            parse: |key, value| {
                 let typed: T = serde_path_to_error::deserialize(value).map_err(|e| {
                     let inner = e.path().to_string();
                     let field = if inner.is_empty() || inner == "." {
@@ -201,7 +280,7 @@ impl SectionDecl {
                     };
                     SceneError::single(field, e.inner().to_string())
                 })?;
-                serde_json::to_value(typed).map_err(|e| SceneError::single(key, e.to_string()))
+                Ok(Arc::new(typed))
             },
             check: |scene, c| match scene.section::<T>() {
                 Ok(section) => section.check(scene, c),
@@ -212,7 +291,14 @@ impl SectionDecl {
 
     /// The section with every default filled in.
     pub fn defaults(&self) -> Value {
-        (self.normalize)(self.key, Value::Object(Doc::new())).unwrap_or(Value::Null)
+        (self.parse)(self.key, Value::Object(Doc::new())).map_or(Value::Null, |s| s.to_value())
+    }
+
+    /// Parses the section from its table in a document (missing keys take
+    /// their defaults) into `into`; the error names the field it rejects.
+    pub(crate) fn parse_into(&self, value: Value, into: &mut Sections) -> Result<(), SceneError> {
+        into.0.insert(self.key, (self.parse)(self.key, value)?);
+        Ok(())
     }
 }
 
@@ -229,20 +315,26 @@ pub const MAX_GRAINS: usize = 1_000_000;
 pub const MAX_DT_FACTOR: f64 = 0.5;
 
 impl Scene {
-    /// One section, typed.
-    pub fn section<T: Section>(&self) -> Result<T, SceneError> {
-        let value = self
-            .sections
-            .get(T::KEY)
-            .cloned()
-            .unwrap_or_else(|| Value::Object(Doc::new()));
-        serde_json::from_value(value).map_err(|e| SceneError::single(T::KEY, e.to_string()))
+    /// One section, as parsed when the scene was built. A scene holds
+    /// every section its protocol and model declare, so the error is for a
+    /// section neither does.
+    pub fn section<T: Section>(&self) -> Result<&T, SceneError> {
+        self.sections.get::<T>().ok_or_else(|| {
+            SceneError::single(
+                T::KEY,
+                format!(
+                    "protocol {} with model {} has no [{}] section",
+                    self.protocol,
+                    self.model,
+                    T::KEY
+                ),
+            )
+        })
     }
 
     /// Replaces one section.
-    pub fn set_section<T: Section>(&mut self, section: &T) {
-        let value = serde_json::to_value(section).unwrap_or(Value::Null);
-        self.sections.insert(T::KEY.to_string(), value);
+    pub fn set_section<T: Section>(&mut self, section: T) {
+        self.sections.0.insert(T::KEY, Arc::new(section));
     }
 
     /// Checks the core: gravity, numerics and the listed grains and walls.
@@ -334,5 +426,57 @@ impl Scene {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::models::elekes_parteli::Material;
+    use crate::models::lee_herrmann::ContactSpec;
+
+    fn pile(mu: f64) -> Scene {
+        Scene::from_toml("protocol = \"fill_release\"", &[format!("contact.mu={mu}")]).unwrap()
+    }
+
+    #[test]
+    fn a_section_is_held_typed_and_written_as_its_table() {
+        let s = pile(0.3);
+        assert_eq!(s.section::<ContactSpec>().unwrap().mu, 0.3);
+        let written = serde_json::to_value(&s).unwrap();
+        assert_eq!(written["contact"]["mu"], 0.3);
+        assert_eq!(
+            s.sections.value("contact"),
+            Some(written["contact"].clone())
+        );
+        let keys: Vec<&str> = s.sections.keys().collect();
+        assert_eq!(
+            keys,
+            ["box", "contact", "equilibrium", "grains", "wall_contact"]
+        );
+        assert_eq!(Scene::from_json(written).unwrap(), s);
+    }
+
+    #[test]
+    fn replacing_a_section_leaves_the_clones_of_a_scene_alone() {
+        let s = pile(0.3);
+        let mut t = s.clone();
+        assert_eq!(t, s);
+        let contact = ContactSpec {
+            mu: 0.1,
+            ..t.section::<ContactSpec>().unwrap().clone()
+        };
+        t.set_section(contact);
+        assert_eq!(t.section::<ContactSpec>().unwrap().mu, 0.1);
+        assert_eq!(s.section::<ContactSpec>().unwrap().mu, 0.3);
+        assert_ne!(t, s);
+        assert_eq!(t, pile(0.1));
+    }
+
+    #[test]
+    fn a_section_the_scene_does_not_declare_is_an_error_that_names_it() {
+        let e = pile(0.3).section::<Material>().unwrap_err();
+        assert_eq!(e.errors[0].field, "material");
+        assert!(e.errors[0].message.contains("fill_release"), "{e}");
     }
 }

@@ -18,6 +18,7 @@ use super::{
 };
 use crate::chart::Chart;
 use repose_physics::measure::Stats;
+use repose_physics::models::elekes_parteli::Material;
 use repose_physics::{Scene, ENGINE};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
@@ -173,8 +174,10 @@ struct Sample {
 costed!(Sample);
 
 fn run_one(case: &Case, scene: &Scene) -> Sample {
-    let modulus = scene.sections["material"]["youngs_modulus"]
-        .as_f64()
+    let modulus = scene
+        .section::<Material>()
+        .ok()
+        .and_then(|m| m.youngs_modulus)
         .unwrap_or(f64::NAN);
     let ran = Ran::of(scene);
     Sample {

@@ -541,7 +541,7 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, Tra
             error,
         })?
         .resolved();
-    let cell = &base.sections["box"];
+    let cell = base.sections.value("box").unwrap_or_default();
     Ok(Report {
         cases: all,
         summaries,
