@@ -431,9 +431,18 @@ impl Material {
         self.rolling == Rolling::Epsd2 && self.rolling_friction > 0.0
     }
 
+    /// The cohesion law simulated: the one asked for, none without surface energy.
+    pub fn cohesion_law(&self) -> Cohesion {
+        if self.surface_energy > 0.0 {
+            self.cohesion
+        } else {
+            Cohesion::None
+        }
+    }
+
     /// Whether the scene has cohesion at all.
     pub fn coheres(&self) -> bool {
-        self.cohesion == Cohesion::Vdw && self.surface_energy > 0.0
+        self.cohesion_law() != Cohesion::None
     }
 
     /// The Hamaker constant `A_H = 24π D_min² γ`, J.
@@ -610,7 +619,10 @@ pub fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, 
                 Scheme::Gear5 => Gear5,
                 Scheme::Verlet => VelocityVerlet,
             };
-            C = m.coheres() => { true => VanDerWaals, false => NoCohesion };
+            C = m.cohesion_law() => {
+                Cohesion::Vdw => VanDerWaals,
+                Cohesion::None => NoCohesion,
+            };
             L = (m.rotation, m.rolls()) => {
                 (true, true) => Law<Epsd2, C, true>,
                 (true, false) => Law<NoRolling, C, true>,
@@ -732,7 +744,7 @@ impl Model for ElekesParteli {
         BTreeMap::from([
             ("damping".to_string(), name(json!(m.damping))),
             ("rolling".to_string(), on(m.rolls(), "epsd2")),
-            ("cohesion".to_string(), on(m.coheres(), "vdw")),
+            ("cohesion".to_string(), name(json!(m.cohesion_law()))),
             ("tangential_cap".to_string(), name(json!(m.tangential_cap))),
             ("limit_load".to_string(), name(json!(m.limit_load))),
             (
