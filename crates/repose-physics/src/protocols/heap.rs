@@ -2,7 +2,7 @@
 //! onto a square plate with open edges, and the angle of repose is read off
 //! the two side views of the settled heap.
 
-use super::pour::{self, Placer, PourJob, Region, RestSpec, Scales};
+use super::pour::{self, Placer, PourJob, Region, Scales};
 use super::runner::{Findings, Runner, Stop};
 use super::{Metric, Observer, Protocol};
 use crate::measure::Profile;
@@ -16,7 +16,6 @@ use repose_engine::dim::Vector;
 use repose_engine::integrate::Integrator;
 use repose_engine::particles::Particles;
 use repose_engine::simulation::{Outlet, Simulation};
-use repose_engine::walls::Wall;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -198,16 +197,9 @@ impl EngineJob<3> for PourJob<'_, HeapSpec> {
     type Output = RunReport;
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> RunReport {
-        let mut sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
+        let sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
         let s = self.scales;
-        RestSpec::apply(self.scene, &s, &mut sim);
-        let mut run = Runner::new(
-            sim,
-            self.scene,
-            self.observer,
-            0.25 * s.time,
-            self.spec.height * s.d,
-        );
+        let mut run = pour::runner(self.scene, &s, self.observer, sim, self.spec.height);
         let state = run
             .resume(&[POUR, SETTLE])
             .unwrap_or_else(|| PourState::new(self.scene.seed));
@@ -239,16 +231,7 @@ fn plate<L: ContactLaw<3>, I: Integrator<3>>(
     d: f64,
     laws: Laws<L>,
 ) -> Simulation<3, L, I> {
-    let floor = Wall::<3>::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
-    let gravity = Vector::<3>::from_column_slice(&scene.gravity);
-    let particles = Particles::<3>::new(L::ROTATES);
-    let mut sim = super::runner::engine(
-        scene,
-        particles,
-        vec![(floor, laws.wall)],
-        gravity,
-        laws.pair,
-    );
+    let mut sim = pour::on_floor(scene, Particles::<3>::new(L::ROTATES), laws);
     let half = 0.5 * spec.plate * d;
     for axis in 0..2 {
         for sign in [-1.0, 1.0] {

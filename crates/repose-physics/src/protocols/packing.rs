@@ -2,8 +2,8 @@
 //! rest at a low solid fraction in a tall column, periodic sideways, settle
 //! on a plate; the packing fraction is read in the middle of the bed.
 
-use super::pour::{self, Placer, PourJob, Region, RestSpec};
-use super::runner::{Findings, Runner};
+use super::pour::{self, Placer, PourJob, Region};
+use super::runner::Findings;
 use super::{Metric, Observer, Protocol};
 use crate::models::elekes_parteli::{Grains, Material};
 use crate::models::{self, EngineJob, Laws};
@@ -15,7 +15,6 @@ use repose_engine::dim::Vector;
 use repose_engine::integrate::Integrator;
 use repose_engine::particles::Particles;
 use repose_engine::simulation::Simulation;
-use repose_engine::walls::Wall;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -148,15 +147,8 @@ impl EngineJob<3> for PourJob<'_, PackingSpec> {
 
     fn run<L: ContactLaw<3>, I: Integrator<3>>(self, laws: Laws<L>) -> Self::Output {
         let s = self.scales;
-        let mut sim = column::<L, I>(self.scene, &self.spec, &self.grains, s.d, laws)?;
-        RestSpec::apply(self.scene, &s, &mut sim);
-        let mut run = Runner::new(
-            sim,
-            self.scene,
-            self.observer,
-            0.25 * s.time,
-            self.spec.height * s.d,
-        );
+        let sim = column::<L, I>(self.scene, &self.spec, &self.grains, s.d, laws)?;
+        let mut run = pour::runner(self.scene, &s, self.observer, sim, self.spec.height);
         let rest = s.rest_energy(self.spec.rest_energy);
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let mut findings = Findings::default();
@@ -203,15 +195,7 @@ fn column<L: ContactLaw<3>, I: Integrator<3>>(
     for (x, dia) in placed {
         particles.push(x, Vector::<3>::zeros(), 0.5 * dia, grains.mass(dia));
     }
-    let floor = Wall::<3>::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
-    let gravity = Vector::<3>::from_column_slice(&scene.gravity);
-    let mut sim = super::runner::engine(
-        scene,
-        particles,
-        vec![(floor, laws.wall)],
-        gravity,
-        laws.pair,
-    );
+    let mut sim = pour::on_floor(scene, particles, laws);
     sim.set_periodic(Vector::<3>::zeros(), [w, w, 0.0])
         .map_err(|e| SceneError::single("packing.width", e))?;
     Ok(sim)

@@ -6,6 +6,7 @@
 use super::runner::{Runner, Stop};
 use super::Observer;
 use crate::models::elekes_parteli::Grains;
+use crate::models::Laws;
 use crate::preset::Preset;
 use crate::report::Phase;
 use crate::scene::{Checks, Scene, SceneError, Section};
@@ -13,7 +14,9 @@ use crate::setup::Stream;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
 use repose_engine::integrate::{Integrator, Scheme};
+use repose_engine::particles::Particles;
 use repose_engine::simulation::{RestRule, Simulation};
+use repose_engine::walls::Wall;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::HashMap;
@@ -189,6 +192,38 @@ impl RestSpec {
             }));
         }
     }
+}
+
+/// An engine for a poured scene: `particles` above a floor of the grains'
+/// material at z = 0, under the scene's gravity.
+pub fn on_floor<L: ContactLaw<3>, I: Integrator<3>>(
+    scene: &Scene,
+    particles: Particles<3>,
+    laws: Laws<L>,
+) -> Simulation<3, L, I> {
+    let floor = Wall::<3>::plane(Vector::<3>::zeros(), Vector::<3>::new(0.0, 0.0, 1.0));
+    let gravity = Vector::<3>::from_column_slice(&scene.gravity);
+    super::runner::engine(
+        scene,
+        particles,
+        vec![(floor, laws.wall)],
+        gravity,
+        laws.pair,
+    )
+}
+
+/// The run of a poured scene on its engine: the scene's rule for grains at
+/// rest put on, checks every quarter √(d/g), and the energy guard sized for
+/// a domain `height` diameters high.
+pub fn runner<'a, L: ContactLaw<3>, I: Integrator<3>>(
+    scene: &'a Scene,
+    scales: &Scales,
+    observer: &'a mut dyn Observer,
+    mut sim: Simulation<3, L, I>,
+    height: f64,
+) -> Runner<'a, 3, L, I> {
+    RestSpec::apply(scene, scales, &mut sim);
+    Runner::new(sim, scene, observer, 0.25 * scales.time, height * scales.d)
 }
 
 /// The speed of a grain that falls `height` (m) under the scene's gravity.

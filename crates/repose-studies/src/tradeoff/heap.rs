@@ -13,7 +13,7 @@
 
 use super::tally::{costed, failure_lines, shift_chart, stats_over, Ran, Tally};
 use super::{
-    cores, gather, preset_cases, stats_cell, write_files, Case, Config, Gathered, Group, Shift,
+    cores, gather, reference_and_presets, stats_cell, write_files, Case, Config, Group, Shift,
     TradeoffError,
 };
 use crate::chart::Chart;
@@ -50,13 +50,7 @@ fn knob(name: &str, what: &str, settings: &[&str]) -> Case {
 }
 
 fn cases() -> Vec<Case> {
-    let mut v = vec![Case::new(
-        Group::Reference,
-        "reference",
-        "Y = 630 MPa, Verlet, dt = T_col/10",
-        &REFERENCE,
-    )];
-    v.extend(preset_cases("heap"));
+    let mut v = reference_and_presets("heap", "Y = 630 MPa, Verlet, dt = T_col/10", &REFERENCE);
     v.push(Case {
         group: Group::Presets,
         name: "quick, no cohesion".into(),
@@ -220,19 +214,14 @@ fn summarise(samples: &[&Sample]) -> Summary {
 /// Runs the heap study and returns its report (`tick` as for [`super::run`]).
 pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<HeapReport, TradeoffError> {
     let all = cases();
-    let Gathered {
-        samples,
-        summaries,
-        fresh,
-        elapsed,
-    } = gather(config, &all, BASE, tick, run_one, summarise)?;
+    let g = gather(config, &all, BASE, tick, run_one, summarise)?;
     Ok(HeapReport {
         cases: all,
-        summaries,
+        summaries: g.summaries,
         config: config.clone(),
-        elapsed,
-        fresh,
-        samples,
+        elapsed: g.elapsed,
+        fresh: g.fresh,
+        samples: g.samples,
     })
 }
 

@@ -159,28 +159,28 @@ impl Case {
     }
 }
 
-/// One case per fidelity preset, described by what it sets in `protocol`.
-pub(crate) fn preset_cases(protocol: &str) -> Vec<Case> {
+/// A study's first cases: the reference (`what` it is, the `reference`
+/// settings), then one case per fidelity preset, described by what it
+/// sets in `protocol`.
+pub(crate) fn reference_and_presets(protocol: &str, what: &str, reference: &[&str]) -> Vec<Case> {
     let found = registry::find_protocol(protocol);
-    Preset::ALL
-        .into_iter()
-        .map(|p| Case {
-            group: Group::Presets,
-            name: p.name().into(),
-            what: found.map(|f| f.preset_line(p)).unwrap_or_default(),
-            overrides: vec![format!("preset={}", p.name())],
-        })
+    let presets = Preset::ALL.into_iter().map(|p| Case {
+        group: Group::Presets,
+        name: p.name().into(),
+        what: found.map(|f| f.preset_line(p)).unwrap_or_default(),
+        overrides: vec![format!("preset={}", p.name())],
+    });
+    std::iter::once(Case::new(Group::Reference, "reference", what, reference))
+        .chain(presets)
         .collect()
 }
 
 fn cases() -> Vec<Case> {
-    let mut v = vec![Case::new(
-        Group::Reference,
-        "reference",
+    let mut v = reference_and_presets(
+        "tilt",
         "Gear-5, dt = t_c/200, equilibrium window 0.2 s",
         &REFERENCE,
-    )];
-    v.extend(preset_cases("tilt"));
+    );
     v.extend([
         Case::knob(
             "Verlet",
