@@ -7,21 +7,24 @@
 
 mod build;
 
-use crate::models::{elekes_parteli, lee_herrmann, Model};
-use crate::protocols::{fill_release, flux, free_run, heap, packing, tilt, Metric, Protocol};
+use crate::models::{self, Model};
+use crate::protocols::{self, Metric, Protocol};
 
-/// Every protocol, by name.
+/// Every protocol, by name: registering one is its line here.
 pub static PROTOCOLS: &[&dyn Protocol] = &[
-    &fill_release::FillRelease,
-    &tilt::Tilt,
-    &flux::Flux,
-    &free_run::FreeRun,
-    &heap::Heap,
-    &packing::Packing,
+    &protocols::fill_release::FillRelease,
+    &protocols::tilt::Tilt,
+    &protocols::flux::Flux,
+    &protocols::free_run::FreeRun,
+    &protocols::heap::Heap,
+    &protocols::packing::Packing,
 ];
 
-/// Every contact model, by name.
-pub static MODELS: &[&dyn Model] = &[&lee_herrmann::LeeHerrmann, &elekes_parteli::ElekesParteli];
+/// Every contact model, by name: registering one is its line here.
+pub static MODELS: &[&dyn Model] = &[
+    &models::lee_herrmann::LeeHerrmann,
+    &models::elekes_parteli::ElekesParteli,
+];
 
 /// All registered protocols.
 pub fn protocols() -> &'static [&'static dyn Protocol] {
