@@ -96,6 +96,11 @@ async fn resumes_after_a_kill(database: &str) {
         (c.iteration > saved.iteration).then_some(c)
     })
     .await;
+    // The sweep tells how far its running job has come.
+    let running = store.sweep(&created.id).await.unwrap().unwrap().running;
+    assert_eq!(running.len(), 1, "{running:?}");
+    assert_eq!(running[0].job_id, job);
+    assert!(running[0].iteration >= later.iteration && running[0].sim_time >= later.sim_time);
     signal(&first, "KILL");
     let _ = first.wait();
     assert_eq!(store.progress(&created.id).await.unwrap().done, 0);
@@ -121,6 +126,13 @@ async fn resumes_after_a_kill(database: &str) {
         .await
         .unwrap();
     assert!(store.checkpoint(&job).await.unwrap().is_none());
+    assert!(store
+        .sweep(&created.id)
+        .await
+        .unwrap()
+        .unwrap()
+        .running
+        .is_empty());
     // The same scene, run here without a stop.
     let scene: String = sqlx::query_scalar("SELECT scene FROM jobs")
         .fetch_one(store.pool())

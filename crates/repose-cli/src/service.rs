@@ -463,6 +463,26 @@ fn points_table(points: &Value, protocol: &str) -> String {
     s
 }
 
+/// One line for each running job's latest checkpoint: how far it has come.
+fn running_lines(running: &Value) -> String {
+    let now_ms = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as i64);
+    let mut s = String::new();
+    for r in running.as_array().into_iter().flatten() {
+        let ago = (now_ms - r["saved_at"].as_i64().unwrap_or(now_ms)).max(0) / 1000;
+        s += &format!(
+            "running {}: checkpoint at {:.4} s simulated, step {}, saved {} min {} s ago\n",
+            r["job_id"].as_str().unwrap_or(""),
+            r["sim_time"].as_f64().unwrap_or(f64::NAN),
+            r["iteration"].as_i64().unwrap_or(0),
+            ago / 60,
+            ago % 60
+        );
+    }
+    s
+}
+
 pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
@@ -497,6 +517,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
                     sweep["state"].as_str().unwrap_or(""),
                     sweep["progress"]
                 );
+                print!("{}", running_lines(&sweep["running"]));
                 let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
                 print!(
                     "{}",

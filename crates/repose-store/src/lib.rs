@@ -393,6 +393,21 @@ pub struct SweepInfo {
     pub eta_seconds: Option<f64>,
     /// What its finished samples took.
     pub cost: Cost,
+    /// How far each running job that has saved a checkpoint has come (a
+    /// long sample's only sign of progress before its result).
+    pub running: Vec<RunningJob>,
+}
+
+/// A running job's latest checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct RunningJob {
+    pub job_id: String,
+    /// Simulated time at the checkpoint, s.
+    pub sim_time: f64,
+    /// Steps taken by then.
+    pub iteration: i64,
+    /// When it was saved, milliseconds since the Unix epoch.
+    pub saved_at: i64,
 }
 
 pub(crate) fn parse_point(text: &str) -> Result<serde_json::Map<String, serde_json::Value>> {

@@ -3,7 +3,8 @@
 //! sums and sums of squares of the metric rows.
 
 use crate::{
-    parse_point, Aggregate, Cost, Point, Progress, Result, RunCounts, Sample, Store, SweepInfo,
+    parse_point, Aggregate, Cost, Point, Progress, Result, RunCounts, RunningJob, Sample, Store,
+    SweepInfo,
 };
 use serde::{Deserialize, Serialize};
 use sqlx::Row;
@@ -112,6 +113,7 @@ impl Store {
             (Some(w), r) if r > 0 => Some(w * left as f64 / r as f64),
             _ => None,
         };
+        let running = self.running_jobs(id).await?;
         Ok(Some(SweepInfo {
             id: row.get("id"),
             name: row.get("name"),
@@ -124,7 +126,29 @@ impl Store {
             progress,
             eta_seconds,
             cost,
+            running,
         }))
+    }
+
+    /// The running jobs of a sweep that have saved a checkpoint, oldest job first.
+    async fn running_jobs(&self, sweep: &str) -> Result<Vec<RunningJob>> {
+        let rows = sqlx::query(&self.sql(
+            "SELECT c.job_id, c.sim_time, c.iteration, c.saved_at \
+             FROM checkpoints c JOIN jobs j ON j.id = c.job_id \
+             WHERE j.sweep_id = $1 AND j.state = 'running' ORDER BY j.seq",
+        ))
+        .bind(sweep)
+        .fetch_all(&self.pool)
+        .await?;
+        Ok(rows
+            .into_iter()
+            .map(|r| RunningJob {
+                job_id: r.get("job_id"),
+                sim_time: r.get("sim_time"),
+                iteration: r.get("iteration"),
+                saved_at: r.get("saved_at"),
+            })
+            .collect())
     }
 
     /// The newest sweep queued for a study sweep (`paper/sweep`) that was not cancelled.
