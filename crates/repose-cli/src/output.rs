@@ -2,6 +2,7 @@
 //! fig. 1a), a CSV of the kinetic-energy trace (fig. 1b) and a legacy VTK
 //! file for ParaView. In 3D the snapshot is the two side views (`side_views`).
 
+use repose_physics::protocols::pile::BoxSpec;
 use repose_physics::RunReport;
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -22,9 +23,10 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         return String::new();
     };
     let up = r.dimension.max(1) - 1;
-    let cell = r.scene.sections.value("box");
-    let num = |k: &str| cell.as_ref().and_then(|b| b[k].as_f64()).unwrap_or(0.0);
-    let width = num("width");
+    let (width, height) = r
+        .scene
+        .section::<BoxSpec>()
+        .map_or((0.0, 0.0), |b| (b.width, b.height));
     let grains = &state.grains;
     let (mut xmin, mut xmax, mut ymax) = (0.0f64, width, 0.0f64);
     for g in grains {
@@ -33,7 +35,7 @@ pub fn snapshot_svg(r: &RunReport) -> String {
         ymax = ymax.max(at(&g.position, up) + g.radius);
     }
     let ymin = -0.1;
-    ymax = ymax.max(num("height")) + 0.1;
+    ymax = ymax.max(height) + 0.1;
     xmin -= 0.1;
     xmax += 0.1;
     let scale = 800.0 / (xmax - xmin).max(1e-9);

@@ -465,9 +465,7 @@ fn points_table(points: &Value, protocol: &str) -> String {
 
 /// One line for each running job's latest checkpoint: how far it has come.
 fn running_lines(running: &Value) -> String {
-    let now_ms = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_millis() as i64);
+    let now_ms = repose_store::now_ms();
     let mut s = String::new();
     for r in running.as_array().into_iter().flatten() {
         let ago = (now_ms - r["saved_at"].as_i64().unwrap_or(now_ms)).max(0) / 1000;

@@ -2,6 +2,7 @@
 //! other, every sphere drawn as its disc, with the outline of the heap in
 //! each view and the triangles its angles of repose stand for.
 
+use repose_physics::protocols::heap::HeapSpec;
 use repose_physics::RunReport;
 use serde_json::Value;
 use std::fmt::Write;
@@ -21,15 +22,7 @@ pub fn svg(r: &RunReport) -> String {
         .map(|g| g.radius)
         .fold(0.0, f64::max)
         .max(1e-12);
-    let half_plate = r
-        .scene
-        .sections
-        .value("heap")
-        .and_then(|h| h["plate"].as_f64())
-        .unwrap_or(0.0)
-        * 0.5
-        * 2.0
-        * largest;
+    let half_plate = r.scene.section::<HeapSpec>().map_or(0.0, |h| h.plate) * 0.5 * 2.0 * largest;
     let mut span = half_plate;
     let mut top = 0.0f64;
     for g in grains {

@@ -590,22 +590,27 @@ pub fn material(scene: &Scene) -> Result<(Grains, Material), SceneError> {
 /// damped for the restitution asked at the scene's step.
 pub fn parts(scene: &Scene) -> Result<(Parts, Parts), SceneError> {
     let (grains, m) = material(scene)?;
+    Ok(parts_of(scene, &grains, &m))
+}
+
+/// [`parts`] of the grains and the material as simulated.
+fn parts_of(scene: &Scene, grains: &Grains, m: &Material) -> (Parts, Parts) {
     let d = grains.diameter;
     let dt = scene.time_step();
     let verlet = scene.numerics.integrator == Scheme::Verlet && dt.is_finite() && dt > 0.0;
     let damped = |kind: Kind| {
-        let step = verlet.then(|| dt / kind.unit(&m, m.impact_speed));
-        kind.damping(&m, m.damping_number(step))
+        let step = verlet.then(|| dt / kind.unit(m, m.impact_speed));
+        kind.damping(m, m.damping_number(step))
     };
-    let pair = Parts::new(&m, damped(Kind::pair(&grains, d)), true);
-    let plate = Parts::new(&m, damped(Kind::plate(&grains, d)), false);
-    Ok((pair, plate))
+    let pair = Parts::new(m, damped(Kind::pair(grains, d)), true);
+    let plate = Parts::new(m, damped(Kind::plate(grains, d)), false);
+    (pair, plate)
 }
 
 /// Runs `job` on the engine for the scene's integrator and options.
 pub fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
-    let m = material(scene)?.1;
-    let (pair, plate) = parts(scene)?;
+    let (grains, m) = material(scene)?;
+    let (pair, plate) = parts_of(scene, &grains, &m);
     let run = |job: J| -> J::Output {
         fn go<J: EngineJob<3>, L: ContactLaw<3>, I: repose_engine::integrate::Integrator<3>>(
             job: J,
