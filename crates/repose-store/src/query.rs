@@ -13,25 +13,11 @@ use std::collections::{BTreeMap, HashMap};
 impl Store {
     /// Job counts by state for one sweep.
     pub async fn progress(&self, sweep_id: &str) -> Result<Progress> {
-        let rows = sqlx::query(
-            &self.sql("SELECT state, COUNT(*) AS n FROM jobs WHERE sweep_id = $1 GROUP BY state"),
-        )
-        .bind(sweep_id)
-        .fetch_all(&self.pool)
-        .await?;
-        let mut p = Progress::default();
-        for r in rows {
-            let n: i64 = r.get("n");
-            match r.get::<String, _>("state").as_str() {
-                "queued" => p.queued = n,
-                "running" => p.running = n,
-                "done" => p.done = n,
-                "failed" => p.failed = n,
-                "cancelled" => p.cancelled = n,
-                _ => {}
-            }
-        }
-        Ok(p)
+        Ok(self
+            .progress_by_sweep(Some(sweep_id))
+            .await?
+            .remove(sweep_id)
+            .unwrap_or_default())
     }
 
     /// Number of sweeps (also a cheap check that the database answers).
@@ -52,17 +38,7 @@ impl Store {
 
     /// All sweeps, newest first, with progress.
     pub async fn sweeps(&self) -> Result<Vec<SweepInfo>> {
-        let ids: Vec<String> =
-            sqlx::query_scalar(&self.sql("SELECT id FROM sweeps ORDER BY created_at DESC, id"))
-                .fetch_all(&self.pool)
-                .await?;
-        let mut out = Vec::with_capacity(ids.len());
-        for id in ids {
-            if let Some(s) = self.sweep(&id).await? {
-                out.push(s);
-            }
-        }
-        Ok(out)
+        self.sweep_infos(None).await
     }
 
     /// A sweep's state and spec as submitted, without its progress (for
@@ -83,72 +59,150 @@ impl Store {
 
     /// One sweep with its progress and ETA, or None.
     pub async fn sweep(&self, id: &str) -> Result<Option<SweepInfo>> {
-        let Some(row) = sqlx::query(&self.sql(
-            "SELECT id, name, protocol, spec, priority, state, created_at, study FROM sweeps WHERE id = $1",
-        ))
-        .bind(id)
-        .fetch_optional(&self.pool)
-        .await?
-        else {
-            return Ok(None);
-        };
-        let progress = self.progress(id).await?;
-        let cost_row = sqlx::query(&self.sql(
-            "SELECT COUNT(*) AS n, SUM(r.wall_time) AS wall, CAST(SUM(r.particle_steps) AS BIGINT) AS steps \
-             FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
-             WHERE j.sweep_id = $1 AND j.state = 'done'",
-        ))
-        .bind(id)
-        .fetch_one(&self.pool)
-        .await?;
-        let cost = Cost {
-            samples: cost_row.get("n"),
-            wall_time: cost_row.get::<Option<f64>, _>("wall").unwrap_or(0.0),
-            particle_steps: cost_row.get::<Option<i64>, _>("steps").unwrap_or(0),
-        };
-        let mean_wall = (cost.samples > 0).then(|| cost.wall_time / cost.samples as f64);
-        let left = progress.queued + progress.running;
-        let eta_seconds = match (mean_wall, progress.running) {
-            (_, _) if left == 0 => Some(0.0),
-            (Some(w), r) if r > 0 => Some(w * left as f64 / r as f64),
-            _ => None,
-        };
-        let running = self.running_jobs(id).await?;
-        Ok(Some(SweepInfo {
-            id: row.get("id"),
-            name: row.get("name"),
-            protocol: row.get("protocol"),
-            study: row.get("study"),
-            priority: row.get("priority"),
-            state: row.get("state"),
-            created_at: row.get("created_at"),
-            spec: serde_json::from_str(&row.get::<String, _>("spec"))?,
-            progress,
-            eta_seconds,
-            cost,
-            running,
-        }))
+        Ok(self.sweep_infos(Some(id)).await?.pop())
     }
 
-    /// The running jobs of a sweep that have saved a checkpoint, oldest job first.
-    async fn running_jobs(&self, sweep: &str) -> Result<Vec<RunningJob>> {
-        let rows = sqlx::query(&self.sql(
-            "SELECT c.job_id, c.sim_time, c.iteration, c.saved_at \
-             FROM checkpoints c JOIN jobs j ON j.id = c.job_id \
-             WHERE j.sweep_id = $1 AND j.state = 'running' ORDER BY j.seq",
-        ))
-        .bind(sweep)
-        .fetch_all(&self.pool)
-        .await?;
+    /// Every sweep, or only the one named, with its progress, cost, ETA
+    /// and running jobs: one query for each of these whatever the number
+    /// of sweeps.
+    async fn sweep_infos(&self, only: Option<&str>) -> Result<Vec<SweepInfo>> {
+        let filter = if only.is_some() { "WHERE id = $1" } else { "" };
+        let rows = self
+            .fetch(
+                &format!(
+                    "SELECT id, name, protocol, spec, priority, state, created_at, study FROM sweeps {filter} \
+                     ORDER BY created_at DESC, id"
+                ),
+                only,
+            )
+            .await?;
+        let mut progress = self.progress_by_sweep(only).await?;
+        let mut costs = self.cost_by_sweep(only).await?;
+        let mut running = self.running_by_sweep(only).await?;
+        rows.into_iter()
+            .map(|row| {
+                let id: String = row.get("id");
+                let progress = progress.remove(&id).unwrap_or_default();
+                let cost = costs.remove(&id).unwrap_or_default();
+                Ok(SweepInfo {
+                    eta_seconds: eta(&progress, &cost),
+                    running: running.remove(&id).unwrap_or_default(),
+                    name: row.get("name"),
+                    protocol: row.get("protocol"),
+                    study: row.get("study"),
+                    priority: row.get("priority"),
+                    state: row.get("state"),
+                    created_at: row.get("created_at"),
+                    spec: serde_json::from_str(&row.get::<String, _>("spec"))?,
+                    id,
+                    progress,
+                    cost,
+                })
+            })
+            .collect()
+    }
+
+    /// Runs a statement whose only parameter, if any, is a sweep id.
+    async fn fetch(&self, text: &str, sweep: Option<&str>) -> Result<Vec<sqlx::any::AnyRow>> {
+        let sql = self.sql(text);
+        let query = sqlx::query(&sql);
+        let query = match sweep {
+            Some(id) => query.bind(id.to_string()),
+            None => query,
+        };
+        Ok(query.fetch_all(&self.pool).await?)
+    }
+
+    /// Job counts by state, by sweep.
+    async fn progress_by_sweep(&self, only: Option<&str>) -> Result<HashMap<String, Progress>> {
+        let filter = if only.is_some() {
+            "WHERE sweep_id = $1"
+        } else {
+            ""
+        };
+        let rows = self
+            .fetch(
+                &format!("SELECT sweep_id, state, COUNT(*) AS n FROM jobs {filter} GROUP BY sweep_id, state"),
+                only,
+            )
+            .await?;
+        let mut out: HashMap<String, Progress> = HashMap::new();
+        for r in rows {
+            let p = out.entry(r.get("sweep_id")).or_default();
+            let n: i64 = r.get("n");
+            match r.get::<String, _>("state").as_str() {
+                "queued" => p.queued = n,
+                "running" => p.running = n,
+                "done" => p.done = n,
+                "failed" => p.failed = n,
+                "cancelled" => p.cancelled = n,
+                _ => {}
+            }
+        }
+        Ok(out)
+    }
+
+    /// What the finished samples took, by sweep.
+    async fn cost_by_sweep(&self, only: Option<&str>) -> Result<HashMap<String, Cost>> {
+        let filter = if only.is_some() {
+            "AND j.sweep_id = $1"
+        } else {
+            ""
+        };
+        let rows = self
+            .fetch(
+                &format!(
+                    "SELECT j.sweep_id, COUNT(*) AS n, SUM(r.wall_time) AS wall, \
+                     CAST(SUM(r.particle_steps) AS BIGINT) AS steps \
+                     FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+                     WHERE j.state = 'done' {filter} GROUP BY j.sweep_id"
+                ),
+                only,
+            )
+            .await?;
         Ok(rows
             .into_iter()
-            .map(|r| RunningJob {
+            .map(|r| {
+                let cost = Cost {
+                    samples: r.get("n"),
+                    wall_time: r.get::<Option<f64>, _>("wall").unwrap_or(0.0),
+                    particle_steps: r.get::<Option<i64>, _>("steps").unwrap_or(0),
+                };
+                (r.get("sweep_id"), cost)
+            })
+            .collect())
+    }
+
+    /// The running jobs that have saved a checkpoint, oldest job first, by sweep.
+    async fn running_by_sweep(
+        &self,
+        only: Option<&str>,
+    ) -> Result<HashMap<String, Vec<RunningJob>>> {
+        let filter = if only.is_some() {
+            "AND j.sweep_id = $1"
+        } else {
+            ""
+        };
+        let rows = self
+            .fetch(
+                &format!(
+                    "SELECT j.sweep_id, c.job_id, c.sim_time, c.iteration, c.saved_at \
+                     FROM checkpoints c JOIN jobs j ON j.id = c.job_id \
+                     WHERE j.state = 'running' {filter} ORDER BY j.seq"
+                ),
+                only,
+            )
+            .await?;
+        let mut out: HashMap<String, Vec<RunningJob>> = HashMap::new();
+        for r in rows {
+            out.entry(r.get("sweep_id")).or_default().push(RunningJob {
                 job_id: r.get("job_id"),
                 sim_time: r.get("sim_time"),
                 iteration: r.get("iteration"),
                 saved_at: r.get("saved_at"),
-            })
-            .collect())
+            });
+        }
+        Ok(out)
     }
 
     /// The newest sweep queued for a study sweep (`paper/sweep`) that was not cancelled.
@@ -294,4 +348,16 @@ pub fn series(
         sa.total_cmp(&sb).then(key(&a.x).total_cmp(&key(&b.x)))
     });
     Ok(out)
+}
+
+/// Seconds until a sweep's queued and running jobs are done, from the mean
+/// wall time of its finished samples and the number running now: zero when
+/// nothing is left, unknown while nothing runs or nothing has finished.
+fn eta(progress: &Progress, cost: &Cost) -> Option<f64> {
+    let left = progress.queued + progress.running;
+    if left == 0 {
+        return Some(0.0);
+    }
+    let mean_wall = (cost.samples > 0).then(|| cost.wall_time / cost.samples as f64)?;
+    (progress.running > 0).then(|| mean_wall * left as f64 / progress.running as f64)
 }

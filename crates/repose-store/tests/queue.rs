@@ -315,3 +315,51 @@ async fn point_statistics_match_the_samples_they_summarise() {
     })
     .await;
 }
+
+#[tokio::test]
+async fn the_sweep_list_gives_each_sweep_its_own_progress_cost_and_eta() {
+    each_backend(|store| async move {
+        let (spec, jobs) = sweep(3, &[0.1]);
+        let first = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        for _ in 0..2 {
+            let c = store
+                .claim("w", Duration::from_secs(60))
+                .await
+                .unwrap()
+                .unwrap();
+            assert!(store
+                .complete(&c.job_id, "w", &c.sample_hash, &report())
+                .await
+                .unwrap());
+        }
+        store
+            .claim("w", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        let (spec, jobs) = sweep(4, &[0.7]);
+        let second = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+
+        let listed = store.sweeps().await.unwrap();
+        assert_eq!(listed.len(), 2);
+        for info in &listed {
+            let alone = store.sweep(&info.id).await.unwrap().unwrap();
+            assert_eq!(info, &alone, "the list and the sweep's own page agree");
+        }
+        let of = |id: &str| listed.iter().find(|s| s.id == id).unwrap();
+        let a = of(&first.id);
+        assert_eq!(
+            (a.progress.done, a.progress.running, a.progress.queued),
+            (2, 1, 0)
+        );
+        assert_eq!((a.cost.samples, a.cost.particle_steps), (2, 2000));
+        // One job left, one running, 0.01 s a finished sample.
+        assert!((a.eta_seconds.unwrap() - 0.01).abs() < 1e-12);
+        let b = of(&second.id);
+        assert_eq!((b.progress.queued, b.progress.done), (4, 0));
+        assert_eq!(b.cost.samples, 0);
+        assert_eq!(b.eta_seconds, None, "nothing finished and nothing running");
+        assert!(store.sweep("no-such-sweep").await.unwrap().is_none());
+    })
+    .await;
+}
