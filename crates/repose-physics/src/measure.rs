@@ -57,6 +57,46 @@ impl Profile {
         }
     }
 
+    /// The silhouette of the grains seen along the other horizontal axis,
+    /// sampled `per_diameter` times a mean diameter over `[lo, hi]`: at each
+    /// sample the highest point of any sphere above it, the centre's height
+    /// plus the half chord √(r² − Δx²). This is the upper boundary of the
+    /// grains' projection that an image of the pile shows; the column
+    /// profile of [`Profile::measure`] lifts each column to the top of its
+    /// highest grain across the whole width, so it stands above the
+    /// silhouette by a fraction of a grain wherever the surface is rough.
+    pub fn silhouette<const D: usize>(
+        pos: &[Vector<D>],
+        radius: &[f64],
+        axis: usize,
+        lo: f64,
+        hi: f64,
+        per_diameter: usize,
+    ) -> Profile {
+        let columns = Profile::measure(pos, radius, axis, lo, hi);
+        let samples = columns.h.len() * per_diameter.max(1);
+        let w = (hi - lo) / samples as f64;
+        let mut h = vec![0.0f64; samples];
+        for (x, &r) in pos.iter().zip(radius) {
+            let centre = x[axis] - lo;
+            let first = ((centre - r) / w).floor().max(0.0) as usize;
+            let last = (((centre + r) / w).floor().max(0.0) as usize).min(samples - 1);
+            for (k, top) in h.iter_mut().enumerate().take(last + 1).skip(first) {
+                let dx = (k as f64 + 0.5) * w - centre;
+                if dx.abs() < r {
+                    *top = top.max(x[D - 1] + (r * r - dx * dx).sqrt());
+                }
+            }
+        }
+        let xs = (0..samples).map(|k| lo + (k as f64 + 0.5) * w).collect();
+        Profile {
+            axis,
+            cell_width: w,
+            x: xs,
+            h,
+        }
+    }
+
     /// Whether this surface is a pile whose slope is an angle of repose:
     /// at least three columns hold grains, and the fitted surface falls
     /// towards the open side, or is level to within a grain.
@@ -256,6 +296,79 @@ mod tests {
         let along_y = Profile::measure(&pos, &radius, 1, 0.0, 1.0);
         assert!((along_x.h[0] - 0.6).abs() < 1e-12 && (along_x.h[4] - 0.2).abs() < 1e-12);
         assert!((along_y.h[0] - 0.2).abs() < 1e-12 && (along_y.h[4] - 0.6).abs() < 1e-12);
+    }
+
+    /// Area under a profile.
+    fn area(p: &Profile) -> f64 {
+        p.h.iter().sum::<f64>() * p.cell_width
+    }
+
+    #[test]
+    fn the_silhouette_of_a_resting_sphere_is_its_disc_on_a_rectangle() {
+        // A sphere of radius r resting on the floor, seen from the side:
+        // the area under its top is the lower half-square 2r² plus the
+        // upper half-disc πr²/2, whatever the column width.
+        let r = 0.5;
+        let pos = vec![Vector::<3>::new(2.3, 1.0, r)];
+        let exact = 2.0 * r * r + std::f64::consts::PI * r * r / 2.0;
+        let fine = Profile::silhouette(&pos, &[r], 0, 0.0, 5.0, 200);
+        assert!(
+            (area(&fine) - exact).abs() < 1e-4 * exact,
+            "{}",
+            area(&fine)
+        );
+        // The column profile fills its whole column to the sphere's top.
+        let columns = Profile::measure(&pos, &[r], 0, 0.0, 5.0);
+        assert!((area(&columns) - 2.0 * r * columns.cell_width).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_silhouette_takes_the_highest_sphere_at_each_point_of_a_row() {
+        // Two touching spheres, the second raised by h: where their discs
+        // overlap in projection the higher one hides the lower.
+        let (r, h) = (0.5, 0.3);
+        let pos = vec![
+            Vector::<3>::new(1.0, 0.0, r),
+            Vector::<3>::new(1.8, 0.7, r + h),
+        ];
+        let s = Profile::silhouette(&pos, &[r, r], 0, 0.0, 3.0, 400);
+        for (x, top) in s.x.iter().zip(&s.h) {
+            let cap = |c: f64, z: f64| {
+                let dx = x - c;
+                if dx.abs() < r {
+                    z + (r * r - dx * dx).sqrt()
+                } else {
+                    0.0
+                }
+            };
+            let expected = cap(1.0, r).max(cap(1.8, r + h));
+            assert!(
+                (top - expected).abs() < 1e-12,
+                "at x = {x}: {top} against {expected}"
+            );
+        }
+        // Seen along the row (axis 1), the two discs lie side by side.
+        let across = Profile::silhouette(&pos, &[r, r], 1, -1.0, 2.0, 400);
+        assert!((across.h.iter().cloned().fold(0.0, f64::max) - (2.0 * r + h)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_column_profile_stands_above_the_silhouette_of_a_rough_surface() {
+        // Grains scattered at uneven heights: each column reaches the top of
+        // its highest grain across its whole width, the silhouette only at
+        // that grain's crown.
+        let mut pos = Vec::new();
+        let mut radius = Vec::new();
+        for k in 0..60 {
+            let u = (k as f64 * 0.618_033_988_75).fract();
+            let v = (k as f64 * 0.414_213_562_37).fract();
+            pos.push(Vector::<3>::new(0.5 + 9.0 * u, 0.0, 0.5 + 3.0 * v));
+            radius.push(0.45 + 0.1 * v);
+        }
+        let columns = Profile::measure(&pos, &radius, 0, 0.0, 10.0);
+        let fine = Profile::silhouette(&pos, &radius, 0, 0.0, 10.0, 20);
+        assert!(area(&fine) < area(&columns));
+        assert!(area(&fine) > 0.8 * area(&columns));
     }
 
     #[test]

@@ -114,7 +114,7 @@ impl Section for HeapSpec {
     }
 }
 
-static METRICS: [Metric; 9] = [
+static METRICS: [Metric; 10] = [
     Metric {
         name: "theta_r",
         label: "θ_r",
@@ -134,6 +134,13 @@ static METRICS: [Metric; 9] = [
         label: "θ_r (footprint)",
         unit: "°",
         description: "the same angle with b the heap's own footprint in each view, for heaps that do not cover the plate",
+        phase: "settle",
+    },
+    Metric {
+        name: "theta_r_silhouette",
+        label: "θ_r (silhouette)",
+        unit: "°",
+        description: "the angle with the plate as base read from the silhouette of the grains in each view (the upper boundary of their projection, sampled at d/20) instead of columns one diameter wide filled to their highest grain's top",
         phase: "settle",
     },
     Metric {
@@ -535,6 +542,21 @@ impl SideView {
     }
 }
 
+/// Samples per grain diameter of the silhouette a heap's angle is also read from.
+pub const SILHOUETTE_SAMPLES: usize = 20;
+
+/// The angle with the plate as base, mean of the two views, read from the
+/// silhouette of the grains rather than from their columns.
+fn silhouette_angle(p: &Particles<3>, spec: &HeapSpec, d: f64) -> f64 {
+    let half = 0.5 * spec.plate * d;
+    let views: Vec<f64> = (0..2)
+        .map(|axis| Profile::silhouette(&p.pos, &p.radius, axis, -half, half, SILHOUETTE_SAMPLES))
+        .filter_map(|pr| SideView::of(&pr, d, spec.plate))
+        .map(|v| v.theta_plate)
+        .collect();
+    views.iter().sum::<f64>() / views.len().max(1) as f64
+}
+
 /// The metrics of the settled heap, or why it cannot be measured.
 fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -> Outcome {
     let half = 0.5 * spec.plate * d;
@@ -562,6 +584,7 @@ fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -
     findings.metric("theta_r", theta);
     findings.metric("theta_r_sd", sd);
     findings.metric("theta_r_footprint", mean_sd(&|v| v.theta_footprint).0);
+    findings.metric("theta_r_silhouette", silhouette_angle(p, spec, d));
     findings.metric("heap_grains", p.len() as f64);
     let top = (0..p.len())
         .map(|i| p.pos[i].z + p.radius[i])
