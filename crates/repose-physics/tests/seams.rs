@@ -3,7 +3,8 @@
 //! checked against mechanics worked out by hand.
 
 use repose_engine::contact::{
-    CohesionLaw, ContactLaw, CundallStrack, HertzDamped, NoCohesion, NoRolling, Pairwise, Touch,
+    CohesionLaw, Cohesive, ContactLaw, CundallStrack, HertzDamped, NoCohesion, NoRolling, Pairwise,
+    Touch,
 };
 use repose_engine::dim::{Dim, Space, Vector};
 use repose_engine::integrate::{Gear5, Integrator, VelocityVerlet};
@@ -90,6 +91,15 @@ where
     Dim<D>: Space<D>,
 {
     const ACTIVE: bool = true;
+
+    /// A toy reading of the surfaces: the surface energy's number as the
+    /// pull (N), across the attraction's range.
+    fn of(surfaces: &Cohesive) -> Self {
+        ConstantPull {
+            force: surfaces.surface_energy,
+            range: surfaces.d_max,
+        }
+    }
 
     fn range(&self) -> f64 {
         self.range

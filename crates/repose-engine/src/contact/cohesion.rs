@@ -2,6 +2,7 @@
 //! and (14).
 
 use super::{CohesionLaw, Touch};
+
 use crate::dim::{Dim, Space};
 
 /// `F = A_H R_eff / (6 (s + D_min)²)` across a gap `s` up to `D_max`,
@@ -22,6 +23,22 @@ pub struct VanDerWaals {
     pub d_min: f64,
     /// Largest gap across which it acts, `D_max`, m.
     pub d_max: f64,
+}
+
+/// What a cohesion law may ask of a pair of surfaces: the material's
+/// quantities and the model's options, whichever law is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cohesive {
+    /// Surface energy `γ`, J/m² (zero for surfaces that do not cohere).
+    pub surface_energy: f64,
+    /// Cut-off of the attraction at contact, `D_min`, m.
+    pub d_min: f64,
+    /// Largest gap across which the attraction acts, `D_max`, m.
+    pub d_max: f64,
+    /// The normal force the sliding and rolling limits scale with.
+    pub limits: Limits,
+    /// Whether the attraction of touching surfaces falls with their overlap.
+    pub fades_in_contact: bool,
 }
 
 /// The normal force that bounds sliding and rolling in a cohesive contact.
@@ -64,6 +81,16 @@ where
     Dim<D>: Space<D>,
 {
     const ACTIVE: bool = true;
+
+    fn of(surfaces: &Cohesive) -> Self {
+        VanDerWaals {
+            limits: surfaces.limits,
+            fades_in_contact: surfaces.fades_in_contact,
+            hamaker: VanDerWaals::hamaker_of(surfaces.surface_energy, surfaces.d_min),
+            d_min: surfaces.d_min,
+            d_max: surfaces.d_max,
+        }
+    }
 
     fn range(&self) -> f64 {
         self.d_max

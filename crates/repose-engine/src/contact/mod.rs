@@ -23,7 +23,7 @@ mod rolling;
 mod spring;
 mod viscoelastic;
 
-pub use cohesion::{Limits, VanDerWaals};
+pub use cohesion::{Cohesive, Limits, VanDerWaals};
 pub use friction::{CundallStrack, Frictionless};
 pub use hertz::HertzDamped;
 pub use rolling::{Epsd2, RollingSpring};
@@ -174,6 +174,9 @@ where
 {
     /// Whether this component acts at all (false for [`NoCohesion`]).
     const ACTIVE: bool;
+    /// The law for a pair of surfaces described by `surfaces`: each law
+    /// takes what it needs of them.
+    fn of(surfaces: &Cohesive) -> Self;
     /// Largest gap across which the attraction acts.
     fn range(&self) -> f64;
     /// Size of the attraction (pulling `i` towards `j`) for this pair.
@@ -220,6 +223,10 @@ where
     Dim<D>: Space<D>,
 {
     const ACTIVE: bool = false;
+
+    fn of(_: &Cohesive) -> Self {
+        NoCohesion
+    }
 
     fn range(&self) -> f64 {
         0.0

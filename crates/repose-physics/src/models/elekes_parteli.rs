@@ -9,14 +9,15 @@ use super::{assemble, select, Build, EngineJob, Laws, Model};
 use crate::doc::Doc;
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use repose_engine::contact::{
-    restitution, Cap, ContactLaw, Epsd2, Limits, MindlinSpring, NoCohesion, NoRolling, Pairwise,
-    VanDerWaals, ViscoelasticHertz,
+    restitution, Cap, CohesionLaw, Cohesive, Epsd2, Limits, MindlinSpring, NoCohesion, NoRolling,
+    Pairwise, RollingLaw, VanDerWaals, ViscoelasticHertz,
 };
-use repose_engine::integrate::{Gear5, Scheme, VelocityVerlet};
+use repose_engine::integrate::{Gear5, Integrator, Scheme, VelocityVerlet};
 use repose_engine::simulation::Units;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
+use std::marker::PhantomData;
 
 pub const NAME: &str = "elekes_parteli";
 
@@ -130,14 +131,50 @@ pub enum Rolling {
     None,
 }
 
-/// Cohesion model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Cohesion {
+/// The cohesion laws the model offers, one line each: the option's value
+/// (`material.cohesion`), its variant of [`Cohesion`] and the engine's law,
+/// which builds itself from the material's [`Cohesive`] quantities. The
+/// first is the default; `none` must stay.
+macro_rules! cohesion_laws {
+    ($($(#[doc = $doc:literal])* $name:literal => $variant:ident($law:ty),)+) => {
+        /// Cohesion model.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+        pub enum Cohesion {
+            $($(#[doc = $doc])* #[serde(rename = $name)] $variant,)+
+        }
+
+        impl Default for Cohesion {
+            fn default() -> Self {
+                [$(Cohesion::$variant),+][0]
+            }
+        }
+
+        $(impl Build<Parts> for $law {
+            fn build(p: &Parts) -> Self {
+                <$law as CohesionLaw<3>>::of(&p.cohesion)
+            }
+        })+
+
+        /// Runs `job` with the law `cohesion` names as its type.
+        fn with_cohesion<J: CohesionJob>(cohesion: Cohesion, job: J) -> J::Output {
+            match cohesion {
+                $(Cohesion::$variant => job.run::<$law>(),)+
+            }
+        }
+    };
+}
+
+cohesion_laws! {
     /// Van der Waals attraction, eqs. (13)–(14).
-    #[default]
-    Vdw,
-    None,
+    "vdw" => Vdw(VanDerWaals),
+    /// No attraction.
+    "none" => None(NoCohesion),
+}
+
+/// Something to do with the cohesion law a scene selects, as a type.
+trait CohesionJob {
+    type Output;
+    fn run<C: CohesionLaw<3> + Build<Parts>>(self) -> Self::Output;
 }
 
 /// What the Coulomb limit caps while a contact slides.
@@ -511,7 +548,7 @@ pub struct Parts {
     pub normal: ViscoelasticHertz,
     pub tangential: MindlinSpring,
     pub rolling: Epsd2,
-    pub cohesion: VanDerWaals,
+    pub cohesion: Cohesive,
 }
 
 impl Parts {
@@ -535,12 +572,12 @@ impl Parts {
                 modulus: m.tangential_modulus(),
                 mu: m.rolling_friction,
             },
-            cohesion: VanDerWaals {
-                limits: m.limit_load.limits(),
-                fades_in_contact: m.contact_attraction == ContactAttraction::Fading,
-                hamaker: if cohesive { m.hamaker() } else { 0.0 },
+            cohesion: Cohesive {
+                surface_energy: if cohesive { m.surface_energy } else { 0.0 },
                 d_min: m.d_min,
                 d_max: m.d_max,
+                limits: m.limit_load.limits(),
+                fades_in_contact: m.contact_attraction == ContactAttraction::Fading,
             },
         }
     }
@@ -561,12 +598,6 @@ impl Build<Parts> for MindlinSpring {
 impl Build<Parts> for Epsd2 {
     fn build(p: &Parts) -> Self {
         p.rolling
-    }
-}
-
-impl Build<Parts> for VanDerWaals {
-    fn build(p: &Parts) -> Self {
-        p.cohesion
     }
 }
 
@@ -611,32 +642,50 @@ fn parts_of(scene: &Scene, grains: &Grains, m: &Material) -> (Parts, Parts) {
 pub fn with_engine<J: EngineJob<3>>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
     let (grains, m) = material(scene)?;
     let (pair, plate) = parts_of(scene, &grains, &m);
-    let run = |job: J| -> J::Output {
-        fn go<J: EngineJob<3>, L: ContactLaw<3>, I: repose_engine::integrate::Integrator<3>>(
-            job: J,
-            pair: L,
-            wall: L,
-        ) -> J::Output {
-            job.run::<L, I>(Laws { pair, wall })
+    select! {
+        I = scene.numerics.integrator => {
+            Scheme::Gear5 => Gear5,
+            Scheme::Verlet => VelocityVerlet,
+        };
+        T = (m.rotation, m.rolls()) => {
+            (true, true) => Turning<Epsd2, true>,
+            (true, false) => Turning<NoRolling, true>,
+            (false, _) => Turning<NoRolling, false>,
+        };
+        => {
+            let engine = Engine::<J, I, T> { job, pair, plate, types: PhantomData };
+            Ok(with_cohesion(m.cohesion_law(), engine))
         }
-        select! {
-            I = scene.numerics.integrator => {
-                Scheme::Gear5 => Gear5,
-                Scheme::Verlet => VelocityVerlet,
-            };
-            C = m.cohesion_law() => {
-                Cohesion::Vdw => VanDerWaals,
-                Cohesion::None => NoCohesion,
-            };
-            L = (m.rotation, m.rolls()) => {
-                (true, true) => Law<Epsd2, C, true>,
-                (true, false) => Law<NoRolling, C, true>,
-                (false, _) => Law<NoRolling, C, false>,
-            };
-            => go::<J, L, I>(job, law(&pair), law(&plate))
-        }
-    };
-    Ok(run(job))
+    }
+}
+
+/// Rolling law `R`, and whether the grains turn (`ROT`).
+struct Turning<R, const ROT: bool>(PhantomData<R>);
+
+/// A job on integrator `I` with the rolling and rotation `T`, and the parts
+/// of its contacts, waiting for the cohesion law.
+struct Engine<J, I, T> {
+    job: J,
+    pair: Parts,
+    plate: Parts,
+    types: PhantomData<(I, T)>,
+}
+
+impl<J, I, R, const ROT: bool> CohesionJob for Engine<J, I, Turning<R, ROT>>
+where
+    J: EngineJob<3>,
+    I: Integrator<3>,
+    R: RollingLaw<3> + Build<Parts>,
+{
+    type Output = J::Output;
+
+    fn run<C: CohesionLaw<3> + Build<Parts>>(self) -> J::Output {
+        let laws = Laws {
+            pair: law::<R, C, ROT>(&self.pair),
+            wall: law::<R, C, ROT>(&self.plate),
+        };
+        self.job.run::<Law<R, C, ROT>, I>(laws)
+    }
 }
 
 impl Model for ElekesParteli {

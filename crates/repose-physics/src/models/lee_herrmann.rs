@@ -8,7 +8,7 @@ use super::{assemble, select, Build, EngineJob, Laws, Model};
 use crate::doc::Doc;
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use crate::setup::{sphere_mass, Stream};
-use repose_engine::contact::{CundallStrack, Frictionless, HertzDamped, Pairwise};
+use repose_engine::contact::{CundallStrack, Frictionless, HertzDamped, NoCohesion, Pairwise};
 use repose_engine::dim::{Dim, Space};
 use repose_engine::integrate::{Gear5, Scheme, VelocityVerlet};
 use repose_engine::simulation::Units;
@@ -314,6 +314,13 @@ impl<const TRUNCATE: bool> Build<Params> for CundallStrack<TRUNCATE> {
             gamma_s: p.gamma_s,
             mu: p.mu,
         }
+    }
+}
+
+/// The paper's grains do not cohere.
+impl Build<Params> for NoCohesion {
+    fn build(_: &Params) -> Self {
+        NoCohesion
     }
 }
 

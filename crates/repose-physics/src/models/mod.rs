@@ -16,7 +16,7 @@ pub mod lee_herrmann;
 
 use crate::doc::Doc;
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};
-use repose_engine::contact::{ContactLaw, Frictionless, NoCohesion, NoRolling, Pairwise};
+use repose_engine::contact::{ContactLaw, Frictionless, NoRolling, Pairwise};
 use repose_engine::dim::{Dim, Space};
 use repose_engine::integrate::Integrator;
 use repose_engine::simulation::Units;
@@ -38,12 +38,6 @@ impl<P> Build<P> for Frictionless {
 impl<P> Build<P> for NoRolling {
     fn build(_: &P) -> Self {
         NoRolling
-    }
-}
-
-impl<P> Build<P> for NoCohesion {
-    fn build(_: &P) -> Self {
-        NoCohesion
     }
 }
 
