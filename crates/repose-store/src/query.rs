@@ -66,13 +66,11 @@ impl Store {
     /// and running jobs: one query for each of these whatever the number
     /// of sweeps.
     async fn sweep_infos(&self, only: Option<&str>) -> Result<Vec<SweepInfo>> {
-        let filter = if only.is_some() { "WHERE id = $1" } else { "" };
         let rows = self
             .fetch(
-                &format!(
-                    "SELECT id, name, protocol, spec, priority, state, created_at, study FROM sweeps {filter} \
-                     ORDER BY created_at DESC, id"
-                ),
+                                    "SELECT id, name, protocol, spec, priority, state, created_at, study FROM sweeps {only} \
+                     ORDER BY created_at DESC, id",
+                "WHERE id = $1",
                 only,
             )
             .await?;
@@ -102,11 +100,17 @@ impl Store {
             .collect()
     }
 
-    /// Runs a statement whose only parameter, if any, is a sweep id.
-    async fn fetch(&self, text: &str, sweep: Option<&str>) -> Result<Vec<sqlx::any::AnyRow>> {
-        let sql = self.sql(text);
+    /// Runs `text` over every sweep, or with `{only}` replaced by `clause`
+    /// (whose one parameter is the sweep id) over the one named.
+    async fn fetch(
+        &self,
+        text: &str,
+        clause: &str,
+        only: Option<&str>,
+    ) -> Result<Vec<sqlx::any::AnyRow>> {
+        let sql = self.sql(&text.replace("{only}", if only.is_some() { clause } else { "" }));
         let query = sqlx::query(&sql);
-        let query = match sweep {
+        let query = match only {
             Some(id) => query.bind(id.to_string()),
             None => query,
         };
@@ -115,14 +119,10 @@ impl Store {
 
     /// Job counts by state, by sweep.
     async fn progress_by_sweep(&self, only: Option<&str>) -> Result<HashMap<String, Progress>> {
-        let filter = if only.is_some() {
-            "WHERE sweep_id = $1"
-        } else {
-            ""
-        };
         let rows = self
             .fetch(
-                &format!("SELECT sweep_id, state, COUNT(*) AS n FROM jobs {filter} GROUP BY sweep_id, state"),
+                "SELECT sweep_id, state, COUNT(*) AS n FROM jobs {only} GROUP BY sweep_id, state",
+                "WHERE sweep_id = $1",
                 only,
             )
             .await?;
@@ -144,19 +144,13 @@ impl Store {
 
     /// What the finished samples took, by sweep.
     async fn cost_by_sweep(&self, only: Option<&str>) -> Result<HashMap<String, Cost>> {
-        let filter = if only.is_some() {
-            "AND j.sweep_id = $1"
-        } else {
-            ""
-        };
         let rows = self
             .fetch(
-                &format!(
-                    "SELECT j.sweep_id, COUNT(*) AS n, SUM(r.wall_time) AS wall, \
+                "SELECT j.sweep_id, COUNT(*) AS n, SUM(r.wall_time) AS wall, \
                      CAST(SUM(r.particle_steps) AS BIGINT) AS steps \
                      FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
-                     WHERE j.state = 'done' {filter} GROUP BY j.sweep_id"
-                ),
+                     WHERE j.state = 'done' {only} GROUP BY j.sweep_id",
+                "AND j.sweep_id = $1",
                 only,
             )
             .await?;
@@ -178,18 +172,12 @@ impl Store {
         &self,
         only: Option<&str>,
     ) -> Result<HashMap<String, Vec<RunningJob>>> {
-        let filter = if only.is_some() {
-            "AND j.sweep_id = $1"
-        } else {
-            ""
-        };
         let rows = self
             .fetch(
-                &format!(
-                    "SELECT j.sweep_id, c.job_id, c.sim_time, c.iteration, c.saved_at \
+                "SELECT j.sweep_id, c.job_id, c.sim_time, c.iteration, c.saved_at \
                      FROM checkpoints c JOIN jobs j ON j.id = c.job_id \
-                     WHERE j.state = 'running' {filter} ORDER BY j.seq"
-                ),
+                     WHERE j.state = 'running' {only} ORDER BY j.seq",
+                "AND j.sweep_id = $1",
                 only,
             )
             .await?;
