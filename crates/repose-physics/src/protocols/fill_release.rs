@@ -2,9 +2,8 @@
 //! box, the right wall is removed, and the pile that stays has the angle of
 //! repose θ_R, measured by the paper's three methods.
 
-use super::pile::{self, BoxSpec, Equilibrium, PileSpec, ReleaseJob};
+use super::pile;
 use super::{Metric, Observer, Protocol};
-use crate::models;
 use crate::report::RunReport;
 use crate::scene::{Scene, SceneError, SectionDecl};
 
@@ -47,10 +46,7 @@ impl Protocol for FillRelease {
     pile::pile_protocol!(filled: true);
 
     fn sections(&self) -> Vec<SectionDecl> {
-        vec![
-            SectionDecl::of::<BoxSpec>(),
-            SectionDecl::of::<Equilibrium>(),
-        ]
+        pile::release_sections(Vec::new())
     }
 
     fn metrics(&self) -> &'static [Metric] {
@@ -58,12 +54,6 @@ impl Protocol for FillRelease {
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let job = ReleaseJob {
-            scene,
-            spec: PileSpec::of(scene)?,
-            observer,
-            after: (),
-        };
-        models::with_engine::<2, _>(scene, job)
+        pile::fill_and_release(scene, observer, ())
     }
 }

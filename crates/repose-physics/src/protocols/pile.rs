@@ -6,10 +6,10 @@ use super::runner::{Findings, Runner, Stop};
 use super::Observer;
 use crate::measure::{Profile, SlopeAngles};
 use crate::models::lee_herrmann::GrainSpec;
-use crate::models::{EngineJob, Laws};
+use crate::models::{self, EngineJob, Laws};
 use crate::preset::Preset;
 use crate::report::{Outcome, Phase, Quantity, RunReport};
-use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS, MAX_PACKING};
+use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS, MAX_PACKING};
 use crate::setup::{random_column, sphere_mass, Stream};
 use crate::theory;
 use repose_engine::contact::ContactLaw;
@@ -268,7 +268,7 @@ pub struct PileSpec {
 
 impl PileSpec {
     pub fn of(scene: &Scene) -> Result<PileSpec, SceneError> {
-        let contact: &crate::models::lee_herrmann::ContactSpec = scene.section()?;
+        let contact: &models::lee_herrmann::ContactSpec = scene.section()?;
         Ok(PileSpec {
             cell: scene.section::<BoxSpec>()?.clone(),
             eq: scene.section::<Equilibrium>()?.clone(),
@@ -398,6 +398,32 @@ impl AfterRelease for () {
     ) -> Outcome {
         Outcome::Completed
     }
+}
+
+/// Fills the closed box of a (resolved) scene, releases the pile and runs
+/// the protocol's own stage `after` on it.
+pub fn fill_and_release<A: AfterRelease>(
+    scene: &Scene,
+    observer: &mut dyn Observer,
+    after: A,
+) -> Result<RunReport, SceneError> {
+    let job = ReleaseJob {
+        scene,
+        spec: PileSpec::of(scene)?,
+        observer,
+        after,
+    };
+    models::with_engine::<2, _>(scene, job)
+}
+
+/// The sections of a protocol that releases a pile from the box, then its own.
+pub fn release_sections(own: Vec<SectionDecl>) -> Vec<SectionDecl> {
+    let mut v = vec![
+        SectionDecl::of::<BoxSpec>(),
+        SectionDecl::of::<Equilibrium>(),
+    ];
+    v.extend(own);
+    v
 }
 
 /// The run of a box protocol: fill the closed box, release the pile

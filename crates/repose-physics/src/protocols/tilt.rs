@@ -3,10 +3,9 @@
 //! that moment. The run first measures θ_R as fill-and-release does.
 
 use super::fill_release::REPOSE_METRICS;
-use super::pile::{self, AfterRelease, BoxSpec, Equilibrium, Pile, PileSpec, ReleaseJob};
+use super::pile::{self, AfterRelease, Pile};
 use super::runner::{Findings, Stop};
 use super::{Metric, Observer, Protocol};
-use crate::models;
 use crate::report::{Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
 use repose_engine::contact::ContactLaw;
@@ -85,11 +84,7 @@ impl Protocol for Tilt {
     pile::pile_protocol!(filled: true);
 
     fn sections(&self) -> Vec<SectionDecl> {
-        vec![
-            SectionDecl::of::<BoxSpec>(),
-            SectionDecl::of::<Equilibrium>(),
-            SectionDecl::of::<TiltSpec>(),
-        ]
+        pile::release_sections(vec![SectionDecl::of::<TiltSpec>()])
     }
 
     fn metrics(&self) -> &'static [Metric] {
@@ -97,13 +92,7 @@ impl Protocol for Tilt {
     }
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {
-        let job = ReleaseJob {
-            scene,
-            spec: PileSpec::of(scene)?,
-            observer,
-            after: scene.section::<TiltSpec>()?.clone(),
-        };
-        models::with_engine::<2, _>(scene, job)
+        pile::fill_and_release(scene, observer, scene.section::<TiltSpec>()?.clone())
     }
 }
 
