@@ -139,6 +139,10 @@ fn a_small_cohesionless_heap_stands_at_a_finite_angle_and_repeats_bit_for_bit() 
     // A heap this small is a low mound on a layer of grains: its footprint
     // angle reads the mound above that layer.
     assert!((0.0..40.0).contains(&m("theta_r_footprint")));
+    // The silhouette lies under the columns filled to their highest top by
+    // a fraction of a grain over the plate: a fraction of a degree.
+    let below = m("theta_r") - m("theta_r_silhouette");
+    assert!((0.1..2.0).contains(&below), "silhouette {below:.2}° below");
     assert!(m("edge_height") < 3.0);
     assert_eq!(m("grains_poured"), 1500.0);
     assert_eq!(m("pour_steady"), 0.0);
