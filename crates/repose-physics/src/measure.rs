@@ -31,13 +31,8 @@ impl Profile {
         lo: f64,
         hi: f64,
     ) -> Profile {
-        let mean_d = if radius.is_empty() {
-            0.2
-        } else {
-            2.0 * radius.iter().sum::<f64>() / radius.len() as f64
-        };
         let width = hi - lo;
-        let cells = ((width / mean_d).round() as usize).max(2);
+        let cells = Profile::columns(radius, width);
         let w = width / cells as f64;
         let mut h = vec![0.0f64; cells];
         for (x, r) in pos.iter().zip(radius) {
@@ -57,6 +52,16 @@ impl Profile {
         }
     }
 
+    /// How many columns one mean diameter wide tile a span `width` (at least two).
+    fn columns(radius: &[f64], width: f64) -> usize {
+        let mean_d = if radius.is_empty() {
+            0.2
+        } else {
+            2.0 * radius.iter().sum::<f64>() / radius.len() as f64
+        };
+        ((width / mean_d).round() as usize).max(2)
+    }
+
     /// The silhouette of the grains seen along the other horizontal axis,
     /// sampled `per_diameter` times a mean diameter over `[lo, hi]`: at each
     /// sample the highest point of any sphere above it, the centre's height
@@ -73,8 +78,7 @@ impl Profile {
         hi: f64,
         per_diameter: usize,
     ) -> Profile {
-        let columns = Profile::measure(pos, radius, axis, lo, hi);
-        let samples = columns.h.len() * per_diameter.max(1);
+        let samples = Profile::columns(radius, hi - lo) * per_diameter.max(1);
         let w = (hi - lo) / samples as f64;
         let mut h = vec![0.0f64; samples];
         for (x, &r) in pos.iter().zip(radius) {

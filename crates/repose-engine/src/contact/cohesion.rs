@@ -2,7 +2,6 @@
 //! and (14).
 
 use super::{CohesionLaw, Touch};
-
 use crate::dim::{Dim, Space};
 
 /// `F = A_H R_eff / (6 (s + D_min)²)` across a gap `s` up to `D_max`,

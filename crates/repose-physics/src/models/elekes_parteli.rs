@@ -482,11 +482,6 @@ impl Material {
         self.cohesion_law() != Cohesion::None
     }
 
-    /// The Hamaker constant `A_H = 24π D_min² γ`, J.
-    pub fn hamaker(&self) -> f64 {
-        VanDerWaals::hamaker_of(self.surface_energy, self.d_min)
-    }
-
     /// The collision's dimensionless damping for the restitution asked,
     /// for a contact stepped by velocity Verlet at `verlet_step` (in units
     /// of the collision, [`Kind::unit`]) if it is.
