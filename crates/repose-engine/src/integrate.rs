@@ -79,12 +79,17 @@ impl VelocityVerlet {
     where
         Dim<D>: Space<D>,
     {
-        for i in 0..p.omega.len() {
-            if p.resting.get(i) == Some(&true) {
-                continue;
+        // Zipped rather than indexed: no bounds checks, and a loop the
+        // compiler can vectorise.
+        let spins = p.omega.iter_mut().zip(&p.torque).zip(&p.inv_inertia);
+        if p.resting.is_empty() {
+            for ((omega, torque), inv_inertia) in spins {
+                *omega += *torque * (half * inv_inertia);
             }
-            let kick = p.torque[i] * (half * p.inv_inertia[i]);
-            p.omega[i] += kick;
+        } else {
+            for (((omega, torque), inv_inertia), _) in spins.zip(&p.resting).filter(|s| !s.1) {
+                *omega += *torque * (half * inv_inertia);
+            }
         }
     }
 
@@ -94,17 +99,18 @@ impl VelocityVerlet {
     where
         Dim<D>: Space<D>,
     {
-        let resting = std::mem::take(&mut p.resting);
-        for i in 0..p.len() {
-            if resting.get(i) == Some(&true) {
-                continue;
-            }
-            p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+        let grains = p
+            .pos
+            .iter_mut()
+            .zip(&mut p.vel)
+            .zip(&p.force)
+            .zip(&p.inv_mass);
+        for ((((pos, vel), force), inv_mass), _) in grains.zip(&p.resting).filter(|g| !g.1) {
+            *vel += *force * (half * inv_mass);
             if let Some(dt) = dt {
-                p.pos[i] += p.vel[i] * dt;
+                *pos += *vel * dt;
             }
         }
-        p.resting = resting;
     }
 }
 
@@ -124,9 +130,15 @@ where
         if p.tracks_rest() {
             Self::kick_drift(p, half, Some(dt));
         } else {
-            for i in 0..p.len() {
-                p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
-                p.pos[i] += p.vel[i] * dt;
+            let grains = p
+                .pos
+                .iter_mut()
+                .zip(&mut p.vel)
+                .zip(&p.force)
+                .zip(&p.inv_mass);
+            for (((pos, vel), force), inv_mass) in grains {
+                *vel += *force * (half * inv_mass);
+                *pos += *vel * dt;
             }
         }
         if p.rotating() {
@@ -140,8 +152,8 @@ where
         if p.tracks_rest() {
             Self::kick_drift(p, half, None);
         } else {
-            for i in 0..p.len() {
-                p.vel[i] += p.force[i] * (half * p.inv_mass[i]);
+            for ((vel, force), inv_mass) in p.vel.iter_mut().zip(&p.force).zip(&p.inv_mass) {
+                *vel += *force * (half * inv_mass);
             }
         }
         if p.rotating() {

@@ -89,6 +89,58 @@ where
     next_id: u32,
 }
 
+/// An angular quantity of the grains (spin, torque) in `D` dimensions.
+type Angular<const D: usize> = <Dim<D> as Space<D>>::Angular;
+
+/// What a contact reads of the grains, every slice cut to the grains'
+/// count: indexing one of them checks an index against the same length as
+/// all the others, so the compiler checks each index once.
+#[derive(Debug, Clone, Copy)]
+pub struct Grains<'a, const D: usize>
+where
+    Dim<D>: Space<D>,
+{
+    pub pos: &'a [Vector<D>],
+    pub vel: &'a [Vector<D>],
+    pub radius: &'a [f64],
+    pub mass: &'a [f64],
+    /// Empty unless the view was taken for rotating grains.
+    pub omega: &'a [Angular<D>],
+    /// Empty unless the view was taken with the grains' rest flags.
+    pub resting: &'a [bool],
+}
+
+impl<'a, const D: usize> Grains<'a, D>
+where
+    Dim<D>: Space<D>,
+{
+    /// Every slice cut to the length of `pos`; `omega` and `resting`
+    /// emptied unless asked for.
+    #[inline(always)]
+    fn cut(self, rotating: bool, resting: bool) -> Self {
+        let n = self.pos.len();
+        Grains {
+            pos: self.pos,
+            vel: &self.vel[..n],
+            radius: &self.radius[..n],
+            mass: &self.mass[..n],
+            omega: if rotating { &self.omega[..n] } else { &[] },
+            resting: if resting { &self.resting[..n] } else { &[] },
+        }
+    }
+}
+
+/// Where a step's contacts add their forces and torques, each cut to the
+/// grains' count (`torque` empty unless the grains rotate).
+#[derive(Debug)]
+pub struct Loads<'a, const D: usize>
+where
+    Dim<D>: Space<D>,
+{
+    pub force: &'a mut [Vector<D>],
+    pub torque: &'a mut [Angular<D>],
+}
+
 impl<const D: usize> Default for Particles<D>
 where
     Dim<D>: Space<D>,
@@ -167,6 +219,45 @@ where
 
     pub fn len(&self) -> usize {
         self.pos.len()
+    }
+
+    /// The grains as contacts read them: with their spins if `rotating`
+    /// (they must rotate), with their rest flags if `resting` (they must be tracked).
+    #[inline(always)]
+    pub fn contact_view(&self, rotating: bool, resting: bool) -> Grains<'_, D> {
+        let all = Grains {
+            pos: &self.pos,
+            vel: &self.vel,
+            radius: &self.radius,
+            mass: &self.mass,
+            omega: &self.omega,
+            resting: &self.resting,
+        };
+        all.cut(rotating, resting)
+    }
+
+    /// [`Particles::contact_view`] beside the forces and torques the contacts
+    /// add to.
+    #[inline(always)]
+    pub fn split(&mut self, rotating: bool, resting: bool) -> (Grains<'_, D>, Loads<'_, D>) {
+        let n = self.pos.len();
+        let all = Grains {
+            pos: &self.pos,
+            vel: &self.vel,
+            radius: &self.radius,
+            mass: &self.mass,
+            omega: &self.omega,
+            resting: &self.resting,
+        };
+        let loads = Loads {
+            force: &mut self.force[..n],
+            torque: if rotating {
+                &mut self.torque[..n]
+            } else {
+                &mut []
+            },
+        };
+        (all.cut(rotating, resting), loads)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -344,5 +435,34 @@ where
                 radius: self.radius[i],
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_contact_view_cuts_every_slice_to_the_grain_count() {
+        let mut p = Particles::<3>::new(true);
+        for k in 0..3 {
+            let x = Vector::<3>::new(k as f64, 0.0, 0.0);
+            p.push(x, Vector::<3>::zeros(), 0.5, 1.0);
+        }
+        let g = p.contact_view(true, false);
+        let lengths = [g.pos, g.vel].map(<[_]>::len);
+        assert_eq!(lengths, [3, 3]);
+        assert_eq!((g.radius.len(), g.mass.len()), (3, 3));
+        assert_eq!((g.omega.len(), g.resting.len()), (3, 0));
+        assert!(p.contact_view(false, false).omega.is_empty());
+
+        p.track_rest(true);
+        let (g, loads) = p.split(true, true);
+        assert_eq!(g.resting.len(), 3);
+        assert_eq!((loads.force.len(), loads.torque.len()), (3, 3));
+        loads.force[2] = Vector::<3>::new(1.0, 2.0, 3.0);
+        assert_eq!(p.force[2], Vector::<3>::new(1.0, 2.0, 3.0));
+        let (_, loads) = p.split(false, false);
+        assert!(loads.torque.is_empty());
     }
 }

@@ -24,13 +24,14 @@ where
     /// Energy stored in the contact springs (normal and tangential).
     pub fn elastic_energy(&self) -> f64 {
         let p = &self.particles;
+        let g = p.contact_view(L::ROTATES, false);
         let mut e = 0.0;
         for (k, [i, j]) in self.neighbors.pairs.iter().enumerate() {
             let (i, j) = (*i as usize, *j as usize);
             let r = self.separation(k, i, j);
             let dist = r.norm();
             if p.radius[i] + p.radius[j] - dist > 0.0 {
-                let touch = super::forces::pair_touch(p, i, j, r, dist, L::ROTATES);
+                let touch = super::forces::pair_touch(&g, i, j, r, dist, L::ROTATES);
                 e += self
                     .pair_law
                     .elastic_energy(&touch, &self.neighbors.history[k]);
@@ -41,7 +42,7 @@ where
                 let i = i as usize;
                 let overlap = p.radius[i] - wall.distance(&p.pos[i]);
                 if overlap > 0.0 && wall.covers(&p.pos[i]) {
-                    let touch = super::forces::wall_touch(p, i, wall.normal, overlap, L::ROTATES);
+                    let touch = super::forces::wall_touch(&g, i, wall.normal, overlap, L::ROTATES);
                     e +=
                         self.wall_laws[w].elastic_energy(&touch, &self.wall_contacts.history[w][k]);
                 }

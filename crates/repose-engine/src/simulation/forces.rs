@@ -8,7 +8,7 @@ use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response, Touch};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
-use crate::particles::Particles;
+use crate::particles::{Grains, Loads};
 use crate::walls::Wall;
 use std::sync::Arc;
 
@@ -58,8 +58,8 @@ where
     /// pair of two resting grains is skipped and the others note whom they wake.
     fn pair_forces_serial<const PERIODIC: bool, const REST: bool>(&mut self) -> (f64, usize) {
         let p = &mut self.particles;
-        for i in 0..p.len() {
-            p.force[i] = self.gravity * p.mass[i];
+        for (f, m) in p.force.iter_mut().zip(&p.mass) {
+            *f = self.gravity * *m;
         }
         for (f, load) in p.force.iter_mut().zip(&p.load) {
             *f += load;
@@ -73,24 +73,25 @@ where
         let nl = &mut self.neighbors;
         let shifts = &nl.shifts;
         let wake_speed2 = self.rest.map_or(0.0, |r| r.speed * r.speed);
+        let (g, mut out) = p.split(L::ROTATES, REST);
         for (k, (&[i, j], history)) in nl.pairs.iter().zip(nl.history.iter_mut()).enumerate() {
             let (i, j) = (i as usize, j as usize);
-            if REST && p.resting[i] && p.resting[j] {
+            if REST && g.resting[i] && g.resting[j] {
                 continue;
             }
             let r = if PERIODIC {
-                p.pos[i] - p.pos[j] - shifts[k]
+                g.pos[i] - g.pos[j] - shifts[k]
             } else {
-                p.pos[i] - p.pos[j]
+                g.pos[i] - g.pos[j]
             };
-            if let Some((response, fraction)) = pair_response(&law, p, i, j, r, history, dt) {
+            if let Some((response, fraction)) = pair_response(&law, &g, i, j, r, history, dt) {
                 if fraction > worst.0 {
                     worst = (fraction, k);
                 }
                 if REST {
-                    self.wake.note(&*p, i, j, wake_speed2);
+                    self.wake.note(&g, i, j, wake_speed2);
                 }
-                apply(p, i, j, &response, L::ROTATES);
+                apply(&mut out, i, j, &response, L::ROTATES);
             }
         }
         worst
@@ -121,9 +122,10 @@ where
             .iter()
             .zip(contacts.history.iter_mut())
             .map(|(c, h)| (&c[..], &mut h[..]));
+        let p = &self.particles;
         let pass = walls_pass(
             (&self.walls, &self.wall_laws),
-            &self.particles,
+            &p.contact_view(L::ROTATES, !p.resting.is_empty()),
             mine,
             (&mut force[..], &mut torque[..], 0),
             self.dt,
@@ -149,15 +151,15 @@ where
     /// Normal force of every touching pair, for drawing force chains:
     /// `(index i, index j, |F_n|)` with the elastic part only (the state is at rest).
     pub fn contact_forces(&self) -> Vec<(usize, usize, f64)> {
-        let p = &self.particles;
+        let g = self.particles.contact_view(L::ROTATES, false);
         let mut out = Vec::new();
         for (k, [i, j]) in self.neighbors.pairs.iter().enumerate() {
             let (i, j) = (*i as usize, *j as usize);
             let r = self.separation(k, i, j);
             let dist = r.norm();
-            let overlap = p.radius[i] + p.radius[j] - dist;
+            let overlap = g.radius[i] + g.radius[j] - dist;
             if overlap > 0.0 && dist > 0.0 {
-                let mut touch = pair_touch(p, i, j, r, dist, L::ROTATES);
+                let mut touch = pair_touch(&g, i, j, r, dist, L::ROTATES);
                 touch.normal = r / dist;
                 let mut h = self.neighbors.history[k];
                 let f = self.pair_law.force(&touch, &mut h, 0.0).force;
@@ -207,7 +209,7 @@ impl WallPass {
 #[inline(always)]
 pub(super) fn walls_pass<'h, const D: usize, L: ContactLaw<D>>(
     (walls, laws): (&[Wall<D>], &[L]),
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     contacts: impl Iterator<Item = (&'h [u32], &'h mut [L::History])>,
     (force, torque, first): (&mut [Vector<D>], &mut [Angular<D>], usize),
     dt: f64,
@@ -219,7 +221,7 @@ where
     let mut pass = WallPass::default();
     for (w, ((wall, law), mine)) in walls.iter().zip(laws).zip(contacts).enumerate() {
         let out = (&mut *force, &mut *torque, first);
-        pass = pass.join(wall_pass(law, (w, wall), p, mine, out, dt));
+        pass = pass.join(wall_pass(law, (w, wall), g, mine, out, dt));
         if pass.through.is_some() {
             break;
         }
@@ -235,7 +237,7 @@ where
 fn wall_pass<const D: usize, L: ContactLaw<D>>(
     law: &L,
     (w, wall): (usize, &Wall<D>),
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     (candidates, history): (&[u32], &mut [L::History]),
     (force, torque, first): (&mut [Vector<D>], &mut [Angular<D>], usize),
     dt: f64,
@@ -246,7 +248,7 @@ where
     let mut pass = WallPass::default();
     for (&i, h) in candidates.iter().zip(history) {
         let i = i as usize;
-        match wall_response(law, wall, p, i, h, dt) {
+        match wall_response(law, wall, g, i, h, dt) {
             Err(()) => {
                 pass.through = Some((w, i));
                 break;
@@ -272,7 +274,7 @@ where
 fn wall_response<const D: usize, L: ContactLaw<D>>(
     law: &L,
     wall: &Wall<D>,
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     i: usize,
     history: &mut L::History,
     dt: f64,
@@ -280,21 +282,21 @@ fn wall_response<const D: usize, L: ContactLaw<D>>(
 where
     Dim<D>: Space<D>,
 {
-    if p.resting.get(i) == Some(&true) {
+    if g.resting.get(i) == Some(&true) {
         return Ok(None);
     }
-    let dist = wall.distance(&p.pos[i]);
-    let overlap = p.radius[i] - dist;
-    if overlap <= 0.0 || !wall.covers(&p.pos[i]) {
+    let dist = wall.distance(&g.pos[i]);
+    let overlap = g.radius[i] - dist;
+    if overlap <= 0.0 || !wall.covers(&g.pos[i]) {
         *history = Default::default();
         return Ok(None);
     }
     if dist < 0.0 {
         return Err(());
     }
-    let touch = wall_touch(p, i, wall.normal, overlap, L::ROTATES);
+    let touch = wall_touch(g, i, wall.normal, overlap, L::ROTATES);
     let response = law.force(&touch, history, dt);
-    Ok(Some((response, overlap / p.radius[i])))
+    Ok(Some((response, overlap / g.radius[i])))
 }
 
 /// The response of pair `(i, j)` at separation `r` and its overlap as a
@@ -303,7 +305,7 @@ where
 #[inline(always)]
 pub(super) fn pair_response<const D: usize, L: ContactLaw<D>>(
     law: &L,
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     i: usize,
     j: usize,
     r: Vector<D>,
@@ -314,20 +316,20 @@ where
     Dim<D>: Space<D>,
 {
     let dist2 = r.norm_squared();
-    let reach = p.radius[i] + p.radius[j];
+    let reach = g.radius[i] + g.radius[j];
     if dist2 >= reach * reach {
         // The contact is open: its spring is gone.
         *history = Default::default();
         if L::ACTS_ACROSS_GAPS {
             let limit = reach + law.range();
             if dist2 < limit * limit {
-                let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
+                let touch = pair_touch(g, i, j, r, dist2.sqrt(), L::ROTATES);
                 return Some((law.gap_force(&touch), 0.0));
             }
         }
         return None;
     }
-    let touch = pair_touch(p, i, j, r, dist2.sqrt(), L::ROTATES);
+    let touch = pair_touch(g, i, j, r, dist2.sqrt(), L::ROTATES);
     let fraction = touch.overlap / touch.radius_i.min(touch.radius_j);
     Some((law.force(&touch, history, dt), fraction))
 }
@@ -335,7 +337,7 @@ where
 /// The pair `(i, j)` with `r = x_i − x_j` at distance `dist`, seen from `i`.
 #[inline(always)]
 pub(super) fn pair_touch<const D: usize>(
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     i: usize,
     j: usize,
     r: Vector<D>,
@@ -345,23 +347,23 @@ pub(super) fn pair_touch<const D: usize>(
 where
     Dim<D>: Space<D>,
 {
-    let (ai, aj) = (p.radius[i], p.radius[j]);
-    let (mi, mj) = (p.mass[i], p.mass[j]);
+    let (ai, aj) = (g.radius[i], g.radius[j]);
+    let (mi, mj) = (g.mass[i], g.mass[j]);
     Touch {
         normal: r * (1.0 / dist),
         overlap: (ai + aj) - dist,
-        velocity: p.vel[i] - p.vel[j],
+        velocity: g.vel[i] - g.vel[j],
         m_eff: mi * mj / (mi + mj),
         r_eff: ai * aj / (ai + aj),
         radius_i: ai,
         radius_j: aj,
         omega_i: if rotating {
-            p.omega[i]
+            g.omega[i]
         } else {
             Default::default()
         },
         omega_j: if rotating {
-            p.omega[j]
+            g.omega[j]
         } else {
             Default::default()
         },
@@ -372,7 +374,7 @@ where
 /// radius and infinite mass that does not turn.
 #[inline(always)]
 pub(super) fn wall_touch<const D: usize>(
-    p: &Particles<D>,
+    g: &Grains<'_, D>,
     i: usize,
     normal: Vector<D>,
     overlap: f64,
@@ -384,13 +386,13 @@ where
     Touch {
         normal,
         overlap,
-        velocity: p.vel[i],
-        m_eff: p.mass[i],
-        r_eff: p.radius[i],
-        radius_i: p.radius[i],
+        velocity: g.vel[i],
+        m_eff: g.mass[i],
+        r_eff: g.radius[i],
+        radius_i: g.radius[i],
         radius_j: 0.0,
         omega_i: if rotating {
-            p.omega[i]
+            g.omega[i]
         } else {
             Default::default()
         },
@@ -401,7 +403,7 @@ where
 /// Adds a pair's response to both grains.
 #[inline(always)]
 fn apply<const D: usize>(
-    p: &mut Particles<D>,
+    out: &mut Loads<'_, D>,
     i: usize,
     j: usize,
     response: &Response<D>,
@@ -409,10 +411,10 @@ fn apply<const D: usize>(
 ) where
     Dim<D>: Space<D>,
 {
-    p.force[i] += response.force;
-    p.force[j] -= response.force;
+    out.force[i] += response.force;
+    out.force[j] -= response.force;
     if rotating {
-        p.torque[i] += response.torque_i;
-        p.torque[j] += response.torque_j;
+        out.torque[i] += response.torque_i;
+        out.torque[j] += response.torque_j;
     }
 }

@@ -451,18 +451,19 @@ where
     fn check_speeds(&self) -> Result<(), Blowup> {
         let p = &self.particles;
         let factor = self.guards.max_step_travel / self.dt;
-        for i in 0..p.len() {
-            let limit = factor * p.radius[i];
-            let v2 = p.vel[i].norm_squared();
-            if v2.is_nan() || v2 >= limit * limit {
-                return Err(Blowup::Runaway {
-                    id: p.id[i],
-                    speed: v2.sqrt(),
-                    time: self.time,
-                    units: self.units,
-                });
-            }
+        let runaway = |(radius, vel): (&f64, &Vector<D>)| {
+            let limit = factor * radius;
+            let v2 = vel.norm_squared();
+            v2.is_nan() || v2 >= limit * limit
+        };
+        match p.radius.iter().zip(&p.vel).position(runaway) {
+            Some(i) => Err(Blowup::Runaway {
+                id: p.id[i],
+                speed: p.vel[i].norm(),
+                time: self.time,
+                units: self.units,
+            }),
+            None => Ok(()),
         }
-        Ok(())
     }
 }

@@ -23,7 +23,7 @@ use super::Simulation;
 use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
-use crate::particles::Particles;
+use crate::particles::Grains;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// When grains are put to rest and woken.
@@ -56,14 +56,14 @@ impl Wake {
     /// the two rests and the other moves faster than `speed2` (squared),
     /// the resting one is to wake.
     #[inline(always)]
-    pub(super) fn note<const D: usize>(&self, p: &Particles<D>, i: usize, j: usize, speed2: f64)
+    pub(super) fn note<const D: usize>(&self, g: &Grains<'_, D>, i: usize, j: usize, speed2: f64)
     where
         Dim<D>: Space<D>,
     {
-        let (ri, rj) = (p.resting[i], p.resting[j]);
+        let (ri, rj) = (g.resting[i], g.resting[j]);
         if ri != rj {
             let (sleeper, mover) = if ri { (i, j) } else { (j, i) };
-            if p.vel[mover].norm_squared() > speed2 {
+            if g.vel[mover].norm_squared() > speed2 {
                 self.flags[sleeper].store(true, Ordering::Relaxed);
             }
         }

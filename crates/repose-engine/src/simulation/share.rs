@@ -23,7 +23,7 @@ use super::{Blowup, Simulation};
 use crate::contact::{ContactLaw, Response};
 use crate::dim::{Dim, Space, Vector};
 use crate::integrate::Integrator;
-use crate::particles::Particles;
+use crate::particles::{Grains, Particles};
 use crate::walls::Wall;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -121,8 +121,10 @@ where
         // Forces and torques are written share by share; everything else is read.
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
+        let p = &self.particles;
         let ctx = Context {
-            p: &self.particles,
+            p,
+            g: p.contact_view(L::ROTATES, !p.resting.is_empty()),
             law: self.pair_law,
             dt: self.dt,
             gravity: self.gravity,
@@ -154,6 +156,8 @@ where
     Dim<D>: Space<D>,
 {
     p: &'a Particles<D>,
+    /// The grains as contacts read them (forces and torques are taken out).
+    g: Grains<'a, D>,
     law: L,
     dt: f64,
     gravity: Vector<D>,
@@ -272,22 +276,22 @@ where
         history: &mut L::History,
     ) -> Option<(Response<D>, f64)> {
         if let Some((wake, speed2)) = self.rest {
-            if self.p.resting[i] && self.p.resting[j] {
+            if self.g.resting[i] && self.g.resting[j] {
                 return None;
             }
             let r = self.separation(k, i, j);
-            let found = pair_response(&self.law, self.p, i, j, r, history, self.dt);
+            let found = pair_response(&self.law, &self.g, i, j, r, history, self.dt);
             if found.is_some() {
-                wake.note(self.p, i, j, speed2);
+                wake.note(&self.g, i, j, speed2);
             }
             return found;
         }
         let r = self.separation(k, i, j);
-        pair_response(&self.law, self.p, i, j, r, history, self.dt)
+        pair_response(&self.law, &self.g, i, j, r, history, self.dt)
     }
 
     fn separation(&self, k: usize, i: usize, j: usize) -> Vector<D> {
-        let r = self.p.pos[i] - self.p.pos[j];
+        let r = self.g.pos[i] - self.g.pos[j];
         if self.shifts.is_empty() {
             r
         } else {
@@ -377,7 +381,7 @@ where
         let mine = piece.walls.iter_mut().map(|(c, h)| (*c, &mut **h));
         walls_pass(
             (self.walls, self.wall_laws),
-            self.p,
+            &self.g,
             mine,
             (&mut *piece.force, &mut *piece.torque, share.grains.start),
             self.dt,
