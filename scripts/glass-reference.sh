@@ -13,6 +13,10 @@
 # unfinished the store is kept in the repository (a copy made by `repose
 # backup` after the server has stopped), so a heap longer than one sitting
 # goes on from its last checkpoint on the next machine.
+#
+# Environment: REPOSE (the program), PORT (8093), STORE (the SQLite store),
+# SERVE_LOG (the server's log, data/glass/serve.log), WORKERS (1). Two sets
+# of sweeps run side by side on two stores, ports and logs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPOSE=${REPOSE:-$PWD/target/release/repose}
@@ -23,7 +27,7 @@ mkdir -p data/glass
 if [ $# -eq 0 ]; then set -- sweeps/glass/*.toml; fi
 
 "$REPOSE" serve --database "sqlite://$STORE" --listen "127.0.0.1:$PORT" \
-  --checkpoint-every 300 --workers "${WORKERS:-1}" > data/glass/serve.log 2>&1 &
+  --checkpoint-every 300 --workers "${WORKERS:-1}" > "${SERVE_LOG:-data/glass/serve.log}" 2>&1 &
 SERVE=$!
 trap 'kill $SERVE 2>/dev/null; wait $SERVE 2>/dev/null || true' EXIT
 for _ in $(seq 1 50); do

@@ -9,7 +9,7 @@
 //! velocity advanced by the same scheme from their torques; for grains that
 //! do not, the angular arrays are empty and no loop visits them.
 
-use crate::dim::{Dim, Space};
+use crate::dim::{Dim, Space, Vector};
 use crate::particles::Particles;
 use serde::{Deserialize, Serialize};
 
@@ -99,17 +99,27 @@ impl VelocityVerlet {
     where
         Dim<D>: Space<D>,
     {
+        type Grain<'a, const D: usize> = (
+            ((&'a mut Vector<D>, &'a mut Vector<D>), &'a Vector<D>),
+            &'a f64,
+        );
+        let kick = |(((pos, vel), force), inv_mass): Grain<'_, D>| {
+            *vel += *force * (half * inv_mass);
+            if let Some(dt) = dt {
+                *pos += *vel * dt;
+            }
+        };
         let grains = p
             .pos
             .iter_mut()
             .zip(&mut p.vel)
             .zip(&p.force)
             .zip(&p.inv_mass);
-        for ((((pos, vel), force), inv_mass), _) in grains.zip(&p.resting).filter(|g| !g.1) {
-            *vel += *force * (half * inv_mass);
-            if let Some(dt) = dt {
-                *pos += *vel * dt;
-            }
+        if p.resting.is_empty() {
+            grains.for_each(kick);
+        } else {
+            let awake = grains.zip(&p.resting).filter(|g| !g.1);
+            awake.for_each(|(grain, _)| kick(grain));
         }
     }
 }
@@ -127,20 +137,7 @@ where
     #[inline]
     fn predict(&mut self, p: &mut Particles<D>, dt: f64) {
         let half = 0.5 * dt;
-        if p.tracks_rest() {
-            Self::kick_drift(p, half, Some(dt));
-        } else {
-            let grains = p
-                .pos
-                .iter_mut()
-                .zip(&mut p.vel)
-                .zip(&p.force)
-                .zip(&p.inv_mass);
-            for (((pos, vel), force), inv_mass) in grains {
-                *vel += *force * (half * inv_mass);
-                *pos += *vel * dt;
-            }
-        }
+        Self::kick_drift(p, half, Some(dt));
         if p.rotating() {
             Self::spin_kick(p, half);
         }
@@ -149,13 +146,7 @@ where
     #[inline]
     fn correct(&mut self, p: &mut Particles<D>, dt: f64) {
         let half = 0.5 * dt;
-        if p.tracks_rest() {
-            Self::kick_drift(p, half, None);
-        } else {
-            for ((vel, force), inv_mass) in p.vel.iter_mut().zip(&p.force).zip(&p.inv_mass) {
-                *vel += *force * (half * inv_mass);
-            }
-        }
+        Self::kick_drift(p, half, None);
         if p.rotating() {
             Self::spin_kick(p, half);
         }

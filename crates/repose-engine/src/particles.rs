@@ -114,6 +114,25 @@ impl<'a, const D: usize> Grains<'a, D>
 where
     Dim<D>: Space<D>,
 {
+    /// Every array of the grains, as long as each is.
+    #[inline(always)]
+    fn whole(
+        pos: &'a [Vector<D>],
+        vel: &'a [Vector<D>],
+        (radius, mass): (&'a [f64], &'a [f64]),
+        omega: &'a [Angular<D>],
+        resting: &'a [bool],
+    ) -> Self {
+        Grains {
+            pos,
+            vel,
+            radius,
+            mass,
+            omega,
+            resting,
+        }
+    }
+
     /// Every slice cut to the length of `pos`; `omega` and `resting`
     /// emptied unless asked for.
     #[inline(always)]
@@ -225,15 +244,9 @@ where
     /// (they must rotate), with their rest flags if `resting` (they must be tracked).
     #[inline(always)]
     pub fn contact_view(&self, rotating: bool, resting: bool) -> Grains<'_, D> {
-        let all = Grains {
-            pos: &self.pos,
-            vel: &self.vel,
-            radius: &self.radius,
-            mass: &self.mass,
-            omega: &self.omega,
-            resting: &self.resting,
-        };
-        all.cut(rotating, resting)
+        let (pos, vel, omega) = (&self.pos, &self.vel, &self.omega);
+        let grains = Grains::whole(pos, vel, (&self.radius, &self.mass), omega, &self.resting);
+        grains.cut(rotating, resting)
     }
 
     /// [`Particles::contact_view`] beside the forces and torques the contacts
@@ -241,23 +254,15 @@ where
     #[inline(always)]
     pub fn split(&mut self, rotating: bool, resting: bool) -> (Grains<'_, D>, Loads<'_, D>) {
         let n = self.pos.len();
-        let all = Grains {
-            pos: &self.pos,
-            vel: &self.vel,
-            radius: &self.radius,
-            mass: &self.mass,
-            omega: &self.omega,
-            resting: &self.resting,
-        };
+        let (pos, vel, omega) = (&self.pos, &self.vel, &self.omega);
+        let grains = Grains::whole(pos, vel, (&self.radius, &self.mass), omega, &self.resting);
+        let (force, torque) = (&mut self.force, &mut self.torque);
+        let torque: &mut [Angular<D>] = if rotating { &mut torque[..n] } else { &mut [] };
         let loads = Loads {
-            force: &mut self.force[..n],
-            torque: if rotating {
-                &mut self.torque[..n]
-            } else {
-                &mut []
-            },
+            force: &mut force[..n],
+            torque,
         };
-        (all.cut(rotating, resting), loads)
+        (grains.cut(rotating, resting), loads)
     }
 
     pub fn is_empty(&self) -> bool {
