@@ -49,30 +49,29 @@ sweep_id() {
 
 declare -A ids
 for spec in "$@"; do ids[$spec]=$(sweep_id "$spec"); done
-# A sweep's count of jobs in one state: queued, running, done or failed.
-count() {
-  "$REPOSE" status --server "$SERVER" | awk -v id="$1" -v col="$2" '
-    BEGIN { split("queued running done failed", names, " "); for (k in names) at[names[k]] = k + 2 }
-    $1 == id { print $(at[col]) }'
+# A sweep's jobs queued, running and failed, in one line.
+counts() {
+  "$REPOSE" status --server "$SERVER" | awk -v id="$1" '$1 == id { print $3, $4, $6 }'
 }
 
 for spec in "$@"; do
   id=${ids[$spec]}
   echo "waiting for $(basename "$spec") ($id)"
-  # Every interruption (a stopped server leaves its job's lease to expire)
-  # uses up one of a job's attempts; a long heap outlives them. Such a job
-  # is given fresh attempts (a few times a run) and goes on from its
-  # checkpoint.
+  # Every interruption that leaves a job's lease to expire (a server
+  # killed, a store copied while it ran) uses up one of the job's attempts;
+  # a long heap outlives them. Such a job is given fresh attempts (a few
+  # times a run) and goes on from its checkpoint.
   retries=3
-  while [ "$(count "$id" queued)" != 0 ] || [ "$(count "$id" running)" != 0 ] ||
-    { [ "$(count "$id" failed)" != 0 ] && [ $retries -gt 0 ]; }; do
-    if [ "$(count "$id" queued)" = 0 ] && [ "$(count "$id" running)" = 0 ]; then
+  while :; do
+    # (no line while the server does not answer: wait on)
+    if read -r queued running failed < <(counts "$id") &&
+      [ "$queued" = 0 ] && [ "$running" = 0 ]; then
+      [ "$failed" != 0 ] && [ $retries -gt 0 ] || break
       retries=$((retries - 1))
       "$REPOSE" retry "$id" --server "$SERVER"
     fi
     sleep 30
   done
-  failed=$(count "$id" failed)
   [ "$failed" = 0 ] || echo "$(basename "$spec"): $failed jobs failed (repose status $id)" >&2
   out=data/glass/$(basename "$spec" .toml).csv
   "$REPOSE" export "$id" --what samples --server "$SERVER" -o "$out"
