@@ -57,18 +57,14 @@ counts() {
 for spec in "$@"; do
   id=${ids[$spec]}
   echo "waiting for $(basename "$spec") ($id)"
-  # Every interruption that leaves a job's lease to expire (a server
-  # killed, a store copied while it ran) uses up one of the job's attempts;
-  # a long heap outlives them. Such a job is given fresh attempts (a few
-  # times a run) and goes on from its checkpoint.
-  retries=3
+  # (no line while the server does not answer: wait on). An interrupted
+  # job that saved a checkpoint since its claim keeps its attempts and
+  # goes on from the checkpoint; a failed job is reported, and `repose
+  # retry` queues it again.
   while :; do
-    # (no line while the server does not answer: wait on)
     if read -r queued running failed < <(counts "$id") &&
       [ "$queued" = 0 ] && [ "$running" = 0 ]; then
-      [ "$failed" != 0 ] && [ $retries -gt 0 ] || break
-      retries=$((retries - 1))
-      "$REPOSE" retry "$id" --server "$SERVER"
+      break
     fi
     sleep 30
   done

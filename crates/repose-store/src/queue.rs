@@ -93,14 +93,22 @@ impl Store {
         Ok(known.is_some())
     }
 
-    /// Returns expired leases to the queue (or fails jobs out of attempts).
+    /// Returns expired leases to the queue, or fails jobs out of attempts.
+    /// An attempt whose holder saved a checkpoint past the one it resumed
+    /// from made progress and is not counted: a long sample interrupted
+    /// again and again still gets to finish, while one that dies before its
+    /// first new checkpoint uses up its attempts as any other job.
     async fn expire_leases(&self, conn: &mut sqlx::AnyConnection, now: i64) -> Result<()> {
-        sqlx::query(&self.sql(
-            "UPDATE jobs SET state = CASE WHEN attempts >= max_attempts THEN 'failed' ELSE 'queued' END, \
-             error = CASE WHEN attempts >= max_attempts THEN 'lease expired after ' || CAST(attempts AS TEXT) || ' attempts' ELSE error END, \
+        const ADVANCED: &str = "EXISTS (SELECT 1 FROM checkpoints c WHERE c.job_id = jobs.id \
+             AND c.iteration > COALESCE(jobs.resume_step, -1))";
+        let spent = format!("(NOT {ADVANCED} AND attempts >= max_attempts)");
+        sqlx::query(&self.sql(&format!(
+            "UPDATE jobs SET state = CASE WHEN {spent} THEN 'failed' ELSE 'queued' END, \
+             error = CASE WHEN {spent} THEN 'lease expired after ' || CAST(attempts AS TEXT) || ' attempts' ELSE error END, \
+             attempts = CASE WHEN {ADVANCED} THEN attempts - 1 ELSE attempts END, \
              lease_owner = NULL, lease_expires = NULL, updated_at = $1 \
-             WHERE state = 'running' AND lease_expires < $1",
-        ))
+             WHERE state = 'running' AND lease_expires < $1"
+        )))
         .bind(now)
         .execute(&mut *conn)
         .await?;
@@ -124,7 +132,8 @@ impl Store {
             }
         };
         let claim_sql = self.sql(&format!(
-            "UPDATE jobs SET state = 'running', lease_owner = $1, lease_expires = $2, attempts = attempts + 1, updated_at = $3 \
+            "UPDATE jobs SET state = 'running', lease_owner = $1, lease_expires = $2, attempts = attempts + 1, updated_at = $3, \
+             resume_step = (SELECT c.iteration FROM checkpoints c WHERE c.job_id = jobs.id) \
              WHERE id = ({pick}) RETURNING id, sweep_id, sample_hash, scene, attempts"
         ));
         let begin = match self.backend {

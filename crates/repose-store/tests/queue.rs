@@ -187,6 +187,72 @@ async fn a_job_out_of_attempts_is_failed_with_the_reason() {
     .await;
 }
 
+/// Claims the sweep's one job with a lease that runs out at once, saves a
+/// checkpoint at `step` if given, and lets the lease lapse.
+async fn interrupted(store: &Store, step: Option<u64>) -> i64 {
+    let c = store
+        .claim("preempted", Duration::from_millis(1))
+        .await
+        .unwrap()
+        .expect("the job is queued");
+    if let Some(step) = step {
+        let saved = store
+            .save_checkpoint(&c.job_id, "preempted", step as f64 * 1e-3, step, b"state")
+            .await
+            .unwrap();
+        assert!(saved, "the holder of the lease saves");
+    }
+    tokio::time::sleep(Duration::from_millis(20)).await;
+    c.attempts
+}
+
+#[tokio::test]
+async fn an_interruption_after_a_new_checkpoint_does_not_use_up_an_attempt() {
+    each_backend(|store| async move {
+        let (spec, jobs) = sweep(1, &[0.2]);
+        let created = store.create_sweep(&spec, &jobs, 2).await.unwrap();
+        // Five interruptions, each after a checkpoint further on: every
+        // claim is the first attempt again.
+        for step in 1..=5u64 {
+            assert_eq!(
+                interrupted(&store, Some(100 * step)).await,
+                1,
+                "claim {step}"
+            );
+        }
+        // Saving the step it resumed from again is no progress, and a holder
+        // that saves nothing is no progress either: those count.
+        assert_eq!(interrupted(&store, Some(500)).await, 1);
+        assert_eq!(interrupted(&store, None).await, 2);
+        assert!(store
+            .claim("next", Duration::from_secs(1))
+            .await
+            .unwrap()
+            .is_none());
+        let p = store.progress(&created.id).await.unwrap();
+        assert_eq!((p.failed, p.queued, p.running), (1, 0, 0));
+        let error: String = sqlx::query_scalar("SELECT error FROM jobs")
+            .fetch_one(store.pool())
+            .await
+            .unwrap();
+        assert!(error.contains("lease expired after 2 attempts"), "{error}");
+        // Given fresh attempts, it still goes on from its last checkpoint.
+        assert!(matches!(
+            store.retry_failed(&created.id).await.unwrap(),
+            repose_store::Retry::Queued(1)
+        ));
+        let c = store
+            .claim("rescuer", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.attempts, 1);
+        let kept = store.checkpoint(&c.job_id).await.unwrap().unwrap();
+        assert_eq!(kept.iteration, 500);
+    })
+    .await;
+}
+
 #[tokio::test]
 async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
     each_backend(|store| async move {
