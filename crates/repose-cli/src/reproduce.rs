@@ -338,13 +338,24 @@ fn command(args: &ReproduceArgs, paper: &Paper) -> String {
     c
 }
 
-/// What the preset sets in the paper's protocols (the first study sweep's).
+/// What the preset sets in the paper's protocols: one line where they all
+/// take the same settings, else one part a protocol (`heap: …; packing: …`).
 fn preset_settings(paper: &Paper, preset: Preset) -> String {
-    (paper.sweeps)()
-        .first()
-        .and_then(|s| registry::find_protocol(s.protocol))
-        .map(|p| p.preset_line(preset))
-        .unwrap_or_default()
+    let mut lines: Vec<(&str, String)> = Vec::new();
+    for s in (paper.sweeps)() {
+        let known = lines.iter().any(|(name, _)| *name == s.protocol);
+        if let Some(p) = registry::find_protocol(s.protocol).filter(|_| !known) {
+            lines.push((s.protocol, p.preset_line(preset)));
+        }
+    }
+    if lines.windows(2).all(|w| w[0].1 == w[1].1) {
+        return lines.pop().map(|(_, line)| line).unwrap_or_default();
+    }
+    let parts: Vec<String> = lines
+        .iter()
+        .map(|(name, line)| format!("{name}: {line}"))
+        .collect();
+    parts.join("; ")
 }
 
 /// The labels of every metric the paper's protocols measure.

@@ -192,7 +192,8 @@ impl Protocol for Heap {
         name: "heap",
         about: "pour spheres onto a plate with open edges and measure the settled heap's angle of repose θ_r",
         spec: HeapSpec,
-        metrics: METRICS
+        metrics: METRICS,
+        presets: pour::preset
     );
 
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError> {

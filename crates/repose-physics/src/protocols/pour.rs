@@ -23,11 +23,11 @@ use std::collections::HashMap;
 
 /// The methods the poured protocols (heap, packing) share: their name and
 /// line, 3D spheres of Elekes & Parteli's model, their own section and the
-/// grains at rest, their metrics, the pour presets and checks, and the
+/// grains at rest, their metrics, their presets, the pour checks, and the
 /// fastest impact, a grain falling the domain's height (`spec`'s `height`,
 /// in diameters).
 macro_rules! poured_protocol {
-    (name: $name:literal, about: $about:literal, spec: $spec:ty, metrics: $metrics:expr) => {
+    (name: $name:literal, about: $about:literal, spec: $spec:ty, metrics: $metrics:expr, presets: $presets:path) => {
         fn name(&self) -> &'static str {
             $name
         }
@@ -56,7 +56,7 @@ macro_rules! poured_protocol {
         }
 
         fn preset(&self, preset: $crate::preset::Preset) -> Vec<(&'static str, serde_json::Value)> {
-            $crate::protocols::pour::preset(preset)
+            $presets(preset)
         }
 
         fn check(&self, scene: &$crate::scene::Scene, c: &mut $crate::scene::Checks) {
