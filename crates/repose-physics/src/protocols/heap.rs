@@ -330,7 +330,10 @@ impl Pour<'_> {
             run.advance(POUR, steps)
                 .map_err(|stop| stop.outcome(POUR, String::new))?;
         }
-        let rest = s.rest_energy(self.spec.rest_energy);
+        let rest = pour::Rest {
+            energy: s.rest_energy(self.spec.rest_energy),
+            exempt: 0.0,
+        };
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let since = self.state.last_insertion;
         pour::settle(run, SETTLE, since, window, rest, &self.state).map_err(|stop: Stop| {
