@@ -158,6 +158,23 @@ async fn an_expired_lease_goes_back_to_the_queue_and_the_old_owner_cannot_comple
     .await;
 }
 
+/// The sweep's one job is failed for lost leases after two attempts, and
+/// nothing is left to claim.
+async fn assert_failed_after_two_attempts(store: &Store, sweep: &str) {
+    assert!(store
+        .claim("next", Duration::from_secs(1))
+        .await
+        .unwrap()
+        .is_none());
+    let p = store.progress(sweep).await.unwrap();
+    assert_eq!((p.failed, p.queued, p.running), (1, 0, 0));
+    let error: String = sqlx::query_scalar("SELECT error FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert!(error.contains("lease expired after 2 attempts"), "{error}");
+}
+
 #[tokio::test]
 async fn a_job_out_of_attempts_is_failed_with_the_reason() {
     each_backend(|store| async move {
@@ -171,18 +188,7 @@ async fn a_job_out_of_attempts_is_failed_with_the_reason() {
                 .unwrap();
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
-        assert!(store
-            .claim("next", Duration::from_secs(1))
-            .await
-            .unwrap()
-            .is_none());
-        let p = store.progress(&created.id).await.unwrap();
-        assert_eq!((p.failed, p.queued, p.running), (1, 0, 0));
-        let error: String = sqlx::query_scalar("SELECT error FROM jobs")
-            .fetch_one(store.pool())
-            .await
-            .unwrap();
-        assert!(error.contains("lease expired after 2 attempts"), "{error}");
+        assert_failed_after_two_attempts(&store, &created.id).await;
     })
     .await;
 }
@@ -224,18 +230,7 @@ async fn an_interruption_after_a_new_checkpoint_does_not_use_up_an_attempt() {
         // that saves nothing is no progress either: those count.
         assert_eq!(interrupted(&store, Some(500)).await, 1);
         assert_eq!(interrupted(&store, None).await, 2);
-        assert!(store
-            .claim("next", Duration::from_secs(1))
-            .await
-            .unwrap()
-            .is_none());
-        let p = store.progress(&created.id).await.unwrap();
-        assert_eq!((p.failed, p.queued, p.running), (1, 0, 0));
-        let error: String = sqlx::query_scalar("SELECT error FROM jobs")
-            .fetch_one(store.pool())
-            .await
-            .unwrap();
-        assert!(error.contains("lease expired after 2 attempts"), "{error}");
+        assert_failed_after_two_attempts(&store, &created.id).await;
         // Given fresh attempts, it still goes on from its last checkpoint.
         assert!(matches!(
             store.retry_failed(&created.id).await.unwrap(),

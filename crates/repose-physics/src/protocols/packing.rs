@@ -342,6 +342,19 @@ mod tests {
     }
 
     #[test]
+    fn a_column_that_would_exempt_half_its_grains_from_rest_is_refused() {
+        for bad in ["0.5", "-0.1", "nan"] {
+            let err = Scene::from_toml(
+                "protocol = \"packing\"",
+                &[format!("packing.rest_exempt={bad}")],
+            )
+            .unwrap_err();
+            let fields: Vec<&str> = err.errors.iter().map(|e| e.field.as_str()).collect();
+            assert_eq!(fields, ["packing.rest_exempt"], "{bad}: {err}");
+        }
+    }
+
+    #[test]
     fn the_standard_column_is_as_stiff_as_glass_where_the_standard_heap_is_softened() {
         let glass = modulus("packing", "paper");
         assert_eq!(modulus("packing", "standard"), glass);

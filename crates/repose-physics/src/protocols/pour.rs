@@ -544,7 +544,49 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
 
 #[cfg(test)]
 mod tests {
+    use super::Rest;
     use crate::scene::Scene;
+    use repose_engine::dim::Vector;
+    use repose_engine::particles::Particles;
+
+    /// 200 grains of unit mass, `fast` of them at speed 1 and the others at
+    /// 10⁻³, with the rule's verdict for a threshold of 10⁻⁵ per grain.
+    fn at_rest(fast: usize, exempt: f64) -> bool {
+        let mut p = Particles::<3>::new(true);
+        for k in 0..200 {
+            let speed = if k % 50 == 7 && k / 50 < fast {
+                1.0
+            } else {
+                1e-3
+            };
+            p.push(
+                Vector::<3>::zeros(),
+                Vector::<3>::new(0.0, speed, 0.0),
+                0.5,
+                1.0,
+            );
+        }
+        let mean = p.kinetic_energy() / p.len() as f64;
+        Rest {
+            energy: 1e-5,
+            exempt,
+        }
+        .holds(&p, mean)
+    }
+
+    #[test]
+    fn a_bed_is_at_rest_but_for_its_exempt_grains() {
+        // The slow grains alone hold 5·10⁻⁷ each, below the threshold; one
+        // fast grain raises the mean to 3·10⁻³.
+        assert!(at_rest(0, 0.0));
+        assert!(!at_rest(1, 0.0));
+        // 0.5 % of 200 is one grain: one fast grain is left out, two are not.
+        assert!(at_rest(1, 0.005));
+        assert!(!at_rest(2, 0.005));
+        // 1 % is two.
+        assert!(at_rest(2, 0.01));
+        assert!(!at_rest(3, 0.01));
+    }
 
     /// The fields a scene names as refused.
     fn refused(protocol: &str, overrides: &[&str]) -> Vec<String> {

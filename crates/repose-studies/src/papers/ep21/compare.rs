@@ -19,9 +19,10 @@ use repose_store::Aggregate;
 const HEAPS_DIFFER: &str =
     "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost)";
 
-/// Why the packings' constants differ, as measured on glass-stiff columns.
+/// Why the packings' constants differ, as measured on glass-stiff columns
+/// with both forms of the contact model.
 const PACKING_DIFFERS: &str =
-    "the paper's value lies outside our 95 % interval. Measured cause: the preset's softening. The same columns at glass's 63 GPa pack denser below 1 mm, and their fit (φ_∞ = 0.573, C = 0.54, D_φ = 146 µm on Earth; 0.574, 0.52 and 154 µm with g̃ = 10 and 0.165) meets the paper's φ_∞ and comes within a factor 1.5 of its D_φ, where the same columns softened give D_φ = 323 µm (docs/model-3d.md, data/glass/packing-*.csv)";
+    "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed packs fine grains too loose even at glass's 63 GPa (these columns stand 0.01–0.06 below the paper's curve between d√g̃ = 40 and 630 µm). With the limits on the net normal force and the attraction fading in contact, the same glass-stiff columns pack denser (200 µm on Earth at 0.568 against 0.491 as printed; the paper's curve 0.524), so the paper's cohesion lies between the two forms; softened as the heaps are (κ = 10⁶) they pack looser still (D_φ = 323 µm on Earth) (docs/model-3d.md, data/glass/packing-*.csv)";
 
 pub fn compare(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
