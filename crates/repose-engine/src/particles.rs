@@ -385,11 +385,15 @@ where
 
     /// Translational kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
+        self.kinetic_energies().sum()
+    }
+
+    /// The translational kinetic energy of each grain, in grain order.
+    pub fn kinetic_energies(&self) -> impl Iterator<Item = f64> + '_ {
         self.vel
             .iter()
             .zip(&self.mass)
             .map(|(v, m)| 0.5 * m * v.norm_squared())
-            .sum()
     }
 
     /// Rotational kinetic energy (zero without rotation).

@@ -11,7 +11,9 @@
 
 use repose_studies::fit::{fit, Datum};
 use repose_studies::papers::ep21::curves::{D_PHI_UM, PACKING, PHI_C, PHI_INF};
-use repose_studies::papers::ep21::G_EARTH;
+use repose_studies::papers::ep21::{G_EARTH, QUANTITIES};
+use repose_studies::quantity::x_value;
+use serde_json::{json, Value};
 use std::collections::HashMap;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -52,18 +54,18 @@ fn points(file: &str) -> Result<Vec<Datum>, Box<dyn std::error::Error>> {
         if field("outcome")? != "completed" {
             continue;
         }
-        let d: f64 = field("axis:grains.diameter")?.parse()?;
-        let g = match row.get("axis:gravity") {
-            // A gravity vector, e.g. `[0.0,0.0,-98.1]`: its size.
-            Some(v) => serde_json::from_str::<Vec<f64>>(v)?
-                .iter()
-                .map(|c| c * c)
-                .sum::<f64>()
-                .sqrt(),
-            None => G_EARTH,
+        // The sample's point, as the study reads it for its own fit.
+        let diameter: f64 = field("axis:grains.diameter")?.parse()?;
+        let gravity: Value = match row.get("axis:gravity") {
+            Some(v) => serde_json::from_str(v)?,
+            None => json!([0.0, 0.0, -G_EARTH]),
         };
+        let point = json!({"grains.diameter": diameter, "gravity": gravity});
+        let point = point.as_object().expect("an object");
+        let x = x_value(point, "ep21.d_sqrt_g_um", &QUANTITIES)
+            .ok_or_else(|| format!("{file}: a diameter or gravity that is not a number"))?;
         out.push(Datum {
-            x: d * 1e6 * (g / G_EARTH).sqrt(),
+            x,
             y: field("packing_fraction")?.parse()?,
             sigma: None,
         });

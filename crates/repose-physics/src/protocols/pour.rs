@@ -434,12 +434,7 @@ impl Rest {
         if mean < self.energy || skip == 0 || skip >= p.len() {
             return mean < self.energy;
         }
-        let mut energy: Vec<f64> = p
-            .vel
-            .iter()
-            .zip(&p.mass)
-            .map(|(v, m)| 0.5 * m * v.norm_squared())
-            .collect();
+        let mut energy: Vec<f64> = p.kinetic_energies().collect();
         // The `skip` largest first, in any order.
         energy.select_nth_unstable_by(skip, |a, b| b.total_cmp(a));
         let rest = &energy[skip..];
