@@ -461,8 +461,9 @@ fn grains_at_rest_change_nothing_between_one_thread_and_two() {
 }
 
 /// The options that cannot hold are refused, naming the field: grains at
-/// rest on the Gear integrator or put to rest in mid-flight, and a
-/// restitution raised past 1 by softening too far.
+/// rest on the Gear integrator or put to rest in mid-flight, a
+/// restitution raised past 1 by softening too far, and a bound on the
+/// attraction's kick that is not a positive number.
 #[test]
 fn options_that_cannot_hold_are_refused_by_field() {
     let refused = |extra: &[&str]| {
@@ -492,4 +493,8 @@ fn options_that_cannot_hold_are_refused_by_field() {
     ]
     .map(String::from);
     assert!(Scene::from_toml(SMALL_HEAP, &o).is_ok());
+    for kick in ["0", "-0.5"] {
+        let bad = refused(&[&format!("numerics.attraction_kick={kick}")]);
+        assert_eq!(bad, vec!["numerics.attraction_kick".to_string()], "{kick}");
+    }
 }

@@ -770,6 +770,21 @@ impl Model for ElekesParteli {
         pair.min(plate)
     }
 
+    /// `m_eff √(g d) / F_0` of the smallest grains, with `F_0` the
+    /// attraction of two of them touching (`π γ d` as simulated).
+    fn attraction_time(&self, scene: &Scene) -> Option<f64> {
+        let (grains, m) = material(scene).ok()?;
+        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !m.coheres() || g <= 0.0 {
+            return None;
+        }
+        let d = grains.diameter_range().0;
+        let pair = Kind::pair(&grains, d);
+        let hamaker = VanDerWaals::hamaker_of(m.surface_energy, m.d_min);
+        let pull = hamaker * pair.r_eff / (6.0 * m.d_min * m.d_min);
+        Some(pair.m_eff * (g * d).sqrt() / pull)
+    }
+
     fn density(&self, scene: &Scene) -> f64 {
         scene.section::<Grains>().map_or(f64::NAN, |g| g.density)
     }

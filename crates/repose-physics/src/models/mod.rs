@@ -79,6 +79,12 @@ pub trait Model: Sync {
     fn resolve(&self, scene: &mut Scene);
     /// Duration of the stiffest contact at the reference speed.
     fn contact_time(&self, scene: &Scene) -> f64;
+    /// The time in which the attraction of two touching grains alone would
+    /// bring them to the speed `√(g d)`, s; none where grains do not
+    /// attract (or nothing sets the speed).
+    fn attraction_time(&self, _scene: &Scene) -> Option<f64> {
+        None
+    }
     /// Density of the grains (their mass is that of a sphere).
     fn density(&self, scene: &Scene) -> f64;
     /// The physics options a run used, by name, for its report.

@@ -44,8 +44,11 @@ pub struct HeapSpec {
     /// Grains poured at most.
     pub max_grains: usize,
     /// The heap is at rest when the translational kinetic energy per grain
-    /// is below this, in m g d.
+    /// is below this, in m g d ...
     pub rest_energy: f64,
+    /// ... leaving out this fraction of its grains, the most energetic
+    /// (rounded up to whole grains; 0, the default, leaves out none).
+    pub rest_exempt: f64,
     /// Least time to settle after the last insertion, √(d/g).
     pub settle_min: f64,
     /// Most time to settle after the last insertion, √(d/g).
@@ -70,6 +73,7 @@ impl Default for HeapSpec {
             interval: 3.5,
             max_grains: 25_000,
             rest_energy: 1e-6,
+            rest_exempt: 0.0,
             settle_min: 20.0,
             settle_max: 400.0,
             steady_every: 0,
@@ -89,7 +93,12 @@ impl Section for HeapSpec {
         c.positive("heap.inlet_width", self.inlet_width);
         c.non_negative("heap.inlet_floor", self.inlet_floor);
         c.positive("heap.interval", self.interval);
-        let settle = [self.rest_energy, self.settle_min, self.settle_max];
+        let settle = [
+            self.rest_energy,
+            self.rest_exempt,
+            self.settle_min,
+            self.settle_max,
+        ];
         pour::check_fill_and_settling(c, "heap", self.fill_fraction, settle);
         if self.max_grains == 0 || self.max_grains > MAX_GRAINS {
             c.fail(
@@ -332,14 +341,18 @@ impl Pour<'_> {
         }
         let rest = pour::Rest {
             energy: s.rest_energy(self.spec.rest_energy),
-            exempt: 0.0,
+            exempt: self.spec.rest_exempt,
         };
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let since = self.state.last_insertion;
         pour::settle(run, SETTLE, since, window, rest, &self.state).map_err(|stop: Stop| {
             stop.outcome(SETTLE, || {
+                let exempt = match self.spec.rest_exempt {
+                    0.0 => String::new(),
+                    x => format!(", leaving out the {} % most energetic grains", 100.0 * x),
+                };
                 format!(
-                    "the heap still moved {:.0} √(d/g) after the last insertion (kinetic energy per grain above {:.0e} m g d)",
+                    "the heap still moved {:.0} √(d/g) after the last insertion (kinetic energy per grain above {:.0e} m g d{exempt})",
                     self.spec.settle_max, self.spec.rest_energy
                 )
             })

@@ -79,11 +79,13 @@ impl Section for PackingSpec {
     fn check(&self, scene: &Scene, c: &mut Checks) {
         c.positive("packing.width", self.width);
         c.positive("packing.height", self.height);
-        let settle = [self.rest_energy, self.settle_min, self.settle_max];
+        let settle = [
+            self.rest_energy,
+            self.rest_exempt,
+            self.settle_min,
+            self.settle_max,
+        ];
         pour::check_fill_and_settling(c, "packing", self.fill_fraction, settle);
-        if !(0.0..0.5).contains(&self.rest_exempt) {
-            c.fail("packing.rest_exempt", "needs 0 ≤ rest_exempt < 0.5");
-        }
         let [lo, hi] = self.slab;
         if !(0.0 <= lo && lo < hi && hi <= 1.0) {
             c.fail("packing.slab", "needs 0 ≤ lower < upper ≤ 1");
@@ -342,15 +344,17 @@ mod tests {
     }
 
     #[test]
-    fn a_column_that_would_exempt_half_its_grains_from_rest_is_refused() {
-        for bad in ["0.5", "-0.1", "nan"] {
-            let err = Scene::from_toml(
-                "protocol = \"packing\"",
-                &[format!("packing.rest_exempt={bad}")],
-            )
-            .unwrap_err();
-            let fields: Vec<&str> = err.errors.iter().map(|e| e.field.as_str()).collect();
-            assert_eq!(fields, ["packing.rest_exempt"], "{bad}: {err}");
+    fn a_bed_or_heap_that_would_exempt_half_its_grains_from_rest_is_refused() {
+        for protocol in ["packing", "heap"] {
+            for bad in ["0.5", "-0.1", "nan"] {
+                let err = Scene::from_toml(
+                    &format!("protocol = \"{protocol}\""),
+                    &[format!("{protocol}.rest_exempt={bad}")],
+                )
+                .unwrap_err();
+                let fields: Vec<&str> = err.errors.iter().map(|e| e.field.as_str()).collect();
+                assert_eq!(fields, [format!("{protocol}.rest_exempt")], "{bad}: {err}");
+            }
         }
     }
 

@@ -148,12 +148,23 @@ impl Scene {
     }
 
     /// The time step this scene runs with: the explicit one, or
-    /// `dt_factor` times the contact time of the stiffest pair.
+    /// `dt_factor` times the contact time of the stiffest pair, shortened
+    /// where the contact attraction would kick a pair by more than
+    /// `attraction_kick` in one step.
     pub fn time_step(&self) -> f64 {
         if let Some(dt) = self.numerics.dt {
             return dt;
         }
-        self.numerics.dt_factor * self.contact_time()
+        let step = self.numerics.dt_factor * self.contact_time();
+        let kick = self.numerics.attraction_kick.filter(|k| *k > 0.0);
+        let kicked = kick.and_then(|kick| {
+            let time = self.model().ok()?.attraction_time(self)?;
+            Some(kick * time)
+        });
+        match kicked {
+            Some(bound) if bound < step => bound,
+            _ => step,
+        }
     }
 
     /// The speed at which the contact time is taken: the reference speed,

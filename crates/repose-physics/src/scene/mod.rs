@@ -139,6 +139,15 @@ pub struct Numerics {
     pub reference_speed: f64,
     /// Explicit time step, s; overrides `dt_factor`.
     pub dt: Option<f64>,
+    /// Most speed, in `√(g d)` of the smallest grain, that the attraction of
+    /// two touching grains may give them in one step: the step is shortened
+    /// where `dt_factor` would allow more (none: no bound; ignored where
+    /// grains do not attract). A step that crosses the attraction's edge
+    /// (it falls from its contact value to nothing within a few `D_min`)
+    /// applies it for a whole step or not at all, a random kick of up to
+    /// this size each time a contact opens or closes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attraction_kick: Option<f64>,
     /// Verlet-list skin.
     pub skin: f64,
     /// Largest overlap allowed, as a fraction of the smaller radius, before a run is failed.
@@ -163,6 +172,7 @@ impl Default for Numerics {
             dt_factor: 0.02,
             reference_speed: 1.0,
             dt: None,
+            attraction_kick: None,
             skin: 0.04,
             max_overlap: 0.5,
             threads: 1,
@@ -364,6 +374,9 @@ impl Scene {
         c.positive("numerics.reference_speed", n.reference_speed);
         if let Some(dt) = n.dt {
             c.positive("numerics.dt", dt);
+        }
+        if let Some(kick) = n.attraction_kick {
+            c.positive("numerics.attraction_kick", kick);
         }
         c.positive("numerics.skin", n.skin);
         c.positive("numerics.max_overlap", n.max_overlap);
