@@ -378,7 +378,7 @@ impl Material {
         let Ok(grains) = scene.section::<Grains>() else {
             return;
         };
-        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let g = scene.gravity_magnitude();
         let y = self.modulus(grains, g);
         let e = self.restitution_at(y);
         if y > 0.0 && e >= 1.0 {
@@ -608,7 +608,7 @@ pub fn law<R: Build<Parts>, C: Build<Parts>, const ROT: bool>(p: &Parts) -> Law<
 pub fn material(scene: &Scene) -> Result<(Grains, Material), SceneError> {
     let grains: &Grains = scene.section()?;
     let m: &Material = scene.section()?;
-    let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let g = scene.gravity_magnitude();
     Ok((grains.clone(), m.effective(grains, g)))
 }
 
@@ -735,7 +735,7 @@ impl Model for ElekesParteli {
         let Ok(m) = scene.section::<Material>() else {
             return;
         };
-        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let g = scene.gravity_magnitude();
         if m.youngs_modulus.is_none() && m.kappa.is_some() && g == 0.0 {
             c.fail(
                 "material.kappa",
@@ -749,7 +749,7 @@ impl Model for ElekesParteli {
         let (Ok(grains), Ok(m)) = (scene.section::<Grains>(), scene.section::<Material>()) else {
             return;
         };
-        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let g = scene.gravity_magnitude();
         let m = Material {
             youngs_modulus: Some(m.modulus(grains, g)),
             ..m.clone()
@@ -771,17 +771,18 @@ impl Model for ElekesParteli {
     }
 
     /// `m_eff √(g d) / F_0` of the smallest grains, with `F_0` the
-    /// attraction of two of them touching (`π γ d` as simulated).
+    /// attraction of two of them touching (`π γ d` as simulated), read off
+    /// the law the engine applies.
     fn attraction_time(&self, scene: &Scene) -> Option<f64> {
         let (grains, m) = material(scene).ok()?;
-        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let g = scene.gravity_magnitude();
         if !m.coheres() || g <= 0.0 {
             return None;
         }
         let d = grains.diameter_range().0;
         let pair = Kind::pair(&grains, d);
-        let hamaker = VanDerWaals::hamaker_of(m.surface_energy, m.d_min);
-        let pull = hamaker * pair.r_eff / (6.0 * m.d_min * m.d_min);
+        let surfaces = Parts::new(&m, 0.0, true).cohesion;
+        let pull = <VanDerWaals as CohesionLaw<3>>::of(&surfaces).at(pair.r_eff, 0.0);
         Some(pair.m_eff * (g * d).sqrt() / pull)
     }
 

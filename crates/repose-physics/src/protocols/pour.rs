@@ -110,7 +110,7 @@ impl Scales {
     pub fn of(scene: &Scene) -> Result<Scales, SceneError> {
         let grains: &Grains = scene.section()?;
         let d = grains.diameter;
-        let g = scene.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let g = scene.gravity_magnitude();
         Ok(Scales {
             d,
             g,
@@ -470,7 +470,8 @@ pub fn settle<L: ContactLaw<3>, I: Integrator<3>>(
 }
 
 /// The fill and settling keys both poured sections carry (`key.fill_fraction`,
-/// `key.rest_energy`, `key.settle_min`, `key.settle_max`), checked alike.
+/// `key.rest_energy`, `key.rest_exempt`, `key.settle_min`, `key.settle_max`),
+/// checked alike.
 pub(super) fn check_fill_and_settling(c: &mut Checks, key: &str, fill: f64, settle: [f64; 4]) {
     let [rest_energy, rest_exempt, settle_min, settle_max] = settle;
     c.positive(&format!("{key}.fill_fraction"), fill);

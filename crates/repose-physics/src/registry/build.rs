@@ -157,14 +157,8 @@ impl Scene {
         }
         let step = self.numerics.dt_factor * self.contact_time();
         let kick = self.numerics.attraction_kick.filter(|k| *k > 0.0);
-        let kicked = kick.and_then(|kick| {
-            let time = self.model().ok()?.attraction_time(self)?;
-            Some(kick * time)
-        });
-        match kicked {
-            Some(bound) if bound < step => bound,
-            _ => step,
-        }
+        let bound = kick.and_then(|kick| Some(kick * self.model().ok()?.attraction_time(self)?));
+        bound.map_or(step, |bound| bound.min(step))
     }
 
     /// The speed at which the contact time is taken: the reference speed,

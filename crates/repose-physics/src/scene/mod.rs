@@ -325,6 +325,11 @@ pub const MAX_GRAINS: usize = 1_000_000;
 pub const MAX_DT_FACTOR: f64 = 0.5;
 
 impl Scene {
+    /// The size of the gravity vector, m/s² (or the scene's units).
+    pub fn gravity_magnitude(&self) -> f64 {
+        self.gravity.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
     /// One section, as parsed when the scene was built. A scene holds
     /// every section its protocol and model declare, so the error is for a
     /// section neither does.
