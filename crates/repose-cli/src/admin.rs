@@ -35,10 +35,10 @@ pub fn retry(args: RetryArgs) -> anyhow::Result<ExitCode> {
             );
         }
         let p = &body["sweep"]["progress"];
-        println!(
-            "sweep {}: {} failed jobs queued again ({} queued, {} done)",
+        crate::emit(&format!(
+            "sweep {}: {} failed jobs queued again ({} queued, {} done)\n",
             args.sweep, body["retried"], p["queued"], p["done"]
-        );
+        ))?;
         Ok(ExitCode::SUCCESS)
     })
 }
@@ -74,10 +74,10 @@ pub fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
             .await
             .with_context(|| format!("cannot open the database {}", args.database))?;
         let counts = store.backup_into(&target).await?;
-        println!(
-            "backup of {} written to {target}: {} sweeps, {} jobs, {} results",
+        crate::emit(&format!(
+            "backup of {} written to {target}: {} sweeps, {} jobs, {} results\n",
             args.database, counts.0, counts.1, counts.2
-        );
+        ))?;
         Ok(ExitCode::SUCCESS)
     })
 }

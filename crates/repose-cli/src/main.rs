@@ -121,11 +121,31 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        // The reader of the output went away (`repose status | head -1`):
+        // what it wanted it has, so leave quietly, as Unix tools do.
+        Err(e) if reader_gone(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
     }
+}
+
+/// Writes `text` to standard output, returning the failure instead of
+/// panicking as `print!` does when the reader has closed the pipe.
+pub(crate) fn emit(text: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()
+}
+
+/// Whether `e` is standard output's reader having closed the pipe.
+fn reader_gone(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Progress bar over simulated time, shown on a terminal only.
@@ -209,9 +229,9 @@ fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         if !args.state {
             report.final_state = None;
         }
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        emit(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
     } else {
-        print!("{}", summary(&report));
+        emit(&summary(&report))?;
     }
     Ok(if report.outcome.is_completed() {
         ExitCode::SUCCESS

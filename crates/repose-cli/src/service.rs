@@ -378,7 +378,10 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
         let id = body["id"].as_str().unwrap_or_default().to_string();
-        println!("sweep {id}: {}", body["message"].as_str().unwrap_or(""));
+        crate::emit(&format!(
+            "sweep {id}: {}\n",
+            body["message"].as_str().unwrap_or("")
+        ))?;
         if !args.wait {
             return Ok(ExitCode::SUCCESS);
         }
@@ -410,7 +413,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
         }
         let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
         let protocol = spec["protocol"].as_str().unwrap_or_default();
-        print!("{}", points_table(&points, protocol));
+        crate::emit(&points_table(&points, protocol))?;
         Ok(ExitCode::SUCCESS)
     })
 }
@@ -485,46 +488,49 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     let server = args.server.trim_end_matches('/').to_string();
     runtime()?.block_on(async {
         let client = crate::client::http()?;
-        match args.sweep {
-            None => {
-                let list = get_json(&client, &format!("{server}/api/sweeps")).await?;
-                println!(
-                    "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  name",
-                    "id", "state", "queued", "running", "done", "failed"
-                );
-                for sw in list["sweeps"].as_array().into_iter().flatten() {
-                    let p = &sw["progress"];
-                    let n = |k: &str| p[k].as_i64().unwrap_or(0);
-                    println!(
-                        "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  {}",
-                        sw["id"].as_str().unwrap_or(""),
-                        sw["state"].as_str().unwrap_or(""),
-                        n("queued"),
-                        n("running"),
-                        n("done"),
-                        n("failed"),
-                        sw["name"].as_str().unwrap_or("")
-                    );
-                }
-            }
+        let text = match args.sweep {
+            None => sweeps_table(&get_json(&client, &format!("{server}/api/sweeps")).await?),
             Some(id) => {
                 let sweep = get_json(&client, &format!("{server}/api/sweeps/{id}")).await?;
-                println!(
-                    "{} ({}): {}",
+                let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
+                format!(
+                    "{} ({}): {}\n{}{}",
                     sweep["name"].as_str().unwrap_or(""),
                     sweep["state"].as_str().unwrap_or(""),
-                    sweep["progress"]
-                );
-                print!("{}", running_lines(&sweep["running"]));
-                let points = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
-                print!(
-                    "{}",
+                    sweep["progress"],
+                    running_lines(&sweep["running"]),
                     points_table(&points, sweep["protocol"].as_str().unwrap_or_default())
-                );
+                )
             }
-        }
+        };
+        crate::emit(&text)?;
         Ok(ExitCode::SUCCESS)
     })
+}
+
+/// One line a sweep: its id, state, job counts and name.
+fn sweeps_table(list: &Value) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  name\n",
+        "id", "state", "queued", "running", "done", "failed"
+    );
+    for sw in list["sweeps"].as_array().into_iter().flatten() {
+        let p = &sw["progress"];
+        let n = |k: &str| p[k].as_i64().unwrap_or(0);
+        let _ = writeln!(
+            s,
+            "{:<36}  {:<9} {:>6} {:>7} {:>6} {:>6}  {}",
+            sw["id"].as_str().unwrap_or(""),
+            sw["state"].as_str().unwrap_or(""),
+            n("queued"),
+            n("running"),
+            n("done"),
+            n("failed"),
+            sw["name"].as_str().unwrap_or("")
+        );
+    }
+    s
 }
 
 pub fn export(args: ExportArgs) -> anyhow::Result<ExitCode> {
@@ -550,7 +556,7 @@ pub fn export(args: ExportArgs) -> anyhow::Result<ExitCode> {
         match &args.output {
             Some(path) => std::fs::write(path, text)
                 .with_context(|| format!("cannot write {}", path.display()))?,
-            None => print!("{text}"),
+            None => crate::emit(&text)?,
         }
         Ok(ExitCode::SUCCESS)
     })

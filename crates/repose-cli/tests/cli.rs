@@ -50,6 +50,24 @@ fn collision_example_prints_one_json_document_with_the_final_state() {
 }
 
 #[test]
+fn a_reader_that_closes_the_pipe_early_ends_the_run_quietly() {
+    // As in `repose run … | head -1`: the reader is gone before the report
+    // is written, which is no error of the run and no reason to panic.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_repose"))
+        .args(["run", "examples/collision.toml", "--json", "--state"])
+        .current_dir(workspace())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the repose binary runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+}
+
+#[test]
 #[cfg_attr(debug_assertions, ignore = "long: run with --release")]
 fn fill_release_writes_a_snapshot_a_trace_and_a_vtk_file() {
     let dir = repose_testkit::scratch_dir("repose-cli");

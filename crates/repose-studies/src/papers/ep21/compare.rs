@@ -19,10 +19,10 @@ use repose_store::Aggregate;
 const HEAPS_DIFFER: &str =
     "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost)";
 
-/// Why the packings' constants differ, as measured on glass-stiff columns
-/// with both forms of the contact model.
+/// Why the packings' constants differ, as measured on glass-stiff
+/// columns: the column's height, then softening.
 const PACKING_DIFFERS: &str =
-    "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed packs fine grains too loose even at glass's 63 GPa (these columns stand 0.01–0.06 below the paper's curve between d√g̃ = 40 and 630 µm). With the limits on the net normal force and the attraction fading in contact, the same glass-stiff columns pack denser (200 µm on Earth at 0.568 against 0.491 as printed; the paper's curve 0.524), so the paper's cohesion lies between the two forms; softened as the heaps are (κ = 10⁶) they pack looser still (D_φ = 323 µm on Earth) (docs/model-3d.md, data/glass/packing-*.csv)";
+    "the paper's value lies outside our 95 % interval. Measured cause: a cohesive column released from lower than the paper's 100 d, or softened, packs fine grains looser. At glass's 63 GPa on the paper's height the study's columns fit φ_∞ = 0.574, C = 0.547 and D_φ = 108 µm, each of the paper's constants inside the interval; released from 40 d (`quick`'s column) 200 µm on Earth packs at 0.496 against 0.529, and D_φ grows to 186 µm; softened as the heaps are (κ = 10⁶) D_φ = 323 µm on Earth (docs/model-3d.md, data/glass/packing-*.csv)";
 
 pub fn compare(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
