@@ -150,8 +150,8 @@ static METRICS: [Metric; 3] = [
 ///
 /// The column's height moves φ too: a cohesive bed released from the
 /// paper's 100 d packs denser than one released from 40 d (glass, 200 µm
-/// on Earth: 0.529 against 0.496), since its grains land faster and under
-/// more weight. Where a scene gives no height, `quick` releases its grains
+/// on Earth: 0.529 against 0.496); its grains land faster and carry more
+/// weight above them. Where a scene gives no height, `quick` releases its grains
 /// from 40 d, at under half the particle-steps, and carries that bias too.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     match preset {

@@ -428,8 +428,7 @@ impl HeapReport {
             "* **The attraction fading in contact.** With the Hamaker law continued into the \
              overlap (`contact_attraction = \"fading\"`) and net limits, glass stands {} \
              against glass with net limits alone and {} above the dry heap (630 MPa); \
-             against it `quick` with the same form stands {} and `standard` {}: softer \
-             grains press deeper, where the fading attraction is weaker.",
+             against it `quick` with the same form stands {} and `standard` {}.",
             self.shift("net limits, fading, glass", "net limits, glass"),
             self.shift("net limits, fading, glass", "no cohesion"),
             self.shift("quick, net limits, fading", "net limits, fading, glass"),
