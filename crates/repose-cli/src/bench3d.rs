@@ -61,7 +61,7 @@ pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     eprintln!("pouring and settling the 2000-sphere heap ...");
     let phases = heap_throughput(&scene(args, &[])?, steps(args))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&phases)?);
+        crate::emit(&format!("{}\n", serde_json::to_string_pretty(&phases)?))?;
         return Ok(ExitCode::SUCCESS);
     }
     println!("{:<9} {}", "phase", throughput_header("LIGGGHTS"));

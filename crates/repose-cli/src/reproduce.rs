@@ -319,7 +319,7 @@ async fn reproduce(
     report
         .write(&out)
         .with_context(|| format!("cannot write the report {}", out.display()))?;
-    print!("{}", report.breakdown());
+    crate::emit(&report.breakdown())?;
     eprintln!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -106,7 +106,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<ExitCode> {
     };
     bar.finish_and_clear();
     match written {
-        Ok(summary) => print!("{summary}"),
+        Ok(summary) => crate::emit(&summary)?,
         Err(TradeoffError::Scene { setting, error }) => {
             eprintln!("error: setting `{setting}` is not a valid scene");
             for f in &error.errors {

@@ -155,13 +155,12 @@ static METRICS: [Metric; 3] = [
 /// from 40 d, at under half the particle-steps, and carries that bias too.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     match preset {
-        Preset::Standard => pour::preset(Preset::Paper),
+        Preset::Standard | Preset::Paper => pour::preset(Preset::Paper),
         Preset::Quick => {
             let mut v = pour::preset(Preset::Quick);
             v.push(("packing.height", Value::from(QUICK_HEIGHT)));
             v
         }
-        Preset::Paper => pour::preset(Preset::Paper),
     }
 }
 

@@ -57,30 +57,34 @@ fn cases() -> Vec<Case> {
         what: "the quick preset with γ = 0: its bias on a dry heap (against `no cohesion`)".into(),
         overrides: vec!["preset=quick".into(), "material.surface_energy=0".into()],
     });
+    // Each softened preset under the other forms of the limits and the
+    // attraction, against glass under the same form.
+    let forms: [(&str, &str, &[&str]); 2] = [
+        (
+            "net limits",
+            "with the limits on the net normal force",
+            &["material.limit_load=net"],
+        ),
+        (
+            "net limits, fading",
+            "with net limits and the attraction fading in contact",
+            &[
+                "material.limit_load=net",
+                "material.contact_attraction=fading",
+            ],
+        ),
+    ];
     for preset in ["quick", "standard"] {
-        v.push(Case {
-            group: Group::Presets,
-            name: format!("{preset}, net limits"),
-            what: format!(
-                "the {preset} preset with the limits on the net normal force (against `net limits, glass`)"
-            ),
-            overrides: vec![
-                format!("preset={preset}"),
-                "material.limit_load=net".into(),
-            ],
-        });
-        v.push(Case {
-            group: Group::Presets,
-            name: format!("{preset}, net limits, fading"),
-            what: format!(
-                "the {preset} preset with net limits and the attraction fading in contact (against `net limits, fading, glass`)"
-            ),
-            overrides: vec![
-                format!("preset={preset}"),
-                "material.limit_load=net".into(),
-                "material.contact_attraction=fading".into(),
-            ],
-        });
+        for (form, what, settings) in forms {
+            let mut overrides = vec![format!("preset={preset}")];
+            overrides.extend(settings.iter().map(|s| s.to_string()));
+            v.push(Case {
+                group: Group::Presets,
+                name: format!("{preset}, {form}"),
+                what: format!("the {preset} preset {what} (against `{form}, glass`)"),
+                overrides,
+            });
+        }
     }
     v.extend(knobs());
     v
