@@ -95,10 +95,14 @@ pub(crate) fn against_base(phases: &[PhaseThroughput], base: &mut Option<(f64, f
 
 /// Particle-steps per second of each option, settled and flowing.
 fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    println!(
+    outln!(
         "{:<52} {:>12} {:>8} {:>12} {:>8}",
-        "option (W = H = 4)", "settled M/s", "× base", "flow M/s", "× base"
-    );
+        "option (W = H = 4)",
+        "settled M/s",
+        "× base",
+        "flow M/s",
+        "× base"
+    )?;
     let mut base: Option<(f64, f64)> = None;
     for (label, overrides) in OPTIONS {
         let mut o = vec![
@@ -112,9 +116,9 @@ fn option_costs(args: &BenchArgs) -> anyhow::Result<ExitCode> {
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         let scale = |n: u64| ((n as f64 * args.scale).round() as u64).max(1);
         let phases = throughput(&scene, scale(50_000), scale(20_000))?;
-        println!("{label:<52} {}", against_base(&phases, &mut base));
+        outln!("{label:<52} {}", against_base(&phases, &mut base))?;
     }
-    println!("({AGAINST_BASE})");
+    outln!("({AGAINST_BASE})")?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -149,8 +153,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             .collect();
         crate::emit(&format!("{}\n", serde_json::to_string_pretty(&out)?))?;
     } else {
-        print_table(&rows, &lammps);
-        print_scheme_ratios(&rows);
+        print_table(&rows, &lammps)?;
+        print_scheme_ratios(&rows)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -192,25 +196,26 @@ fn measure_sizes(args: &BenchArgs) -> anyhow::Result<Result<Vec<Row>, String>> {
     Ok(Ok(rows))
 }
 
-fn print_table(rows: &[Row], lammps: &HashMap<(String, String), f64>) {
-    println!(
+fn print_table(rows: &[Row], lammps: &HashMap<(String, String), f64>) -> std::io::Result<()> {
+    outln!(
         "{:<8} {:<7} {:<8} {}",
         "scene",
         "scheme",
         "phase",
         throughput_header("LAMMPS")
-    );
-    println!("{:<53}   {:^31}", "", "ns per particle-step, by stage");
+    )?;
+    outln!("{:<53}   {:^31}", "", "ns per particle-step, by stage")?;
     for (size, scheme, p) in rows {
         let key = (format!("{size:.0}"), p.phase.to_string());
-        println!(
+        outln!(
             "{:<8} {:<7} {:<8} {}",
             format!("W=H={size}"),
             scheme,
             p.phase,
             throughput_cells(p, lammps.get(&key))
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The heads of the columns of [`throughput_cells`], the peer named.
@@ -249,7 +254,7 @@ pub(crate) fn throughput_cells(p: &PhaseThroughput, peer: Option<&f64>) -> Strin
 }
 
 /// Gear-5 against Verlet for each size and phase measured with both.
-fn print_scheme_ratios(rows: &[Row]) {
+fn print_scheme_ratios(rows: &[Row]) -> std::io::Result<()> {
     let find = |size: f64, scheme: &str, phase: &str| {
         rows.iter()
             .find(|(s, sc, p)| *s == size && *sc == scheme && p.phase == phase)
@@ -260,13 +265,14 @@ fn print_scheme_ratios(rows: &[Row]) {
             find(*size, "gear5", p.phase),
             find(*size, "verlet", p.phase),
         ) {
-            println!(
+            outln!(
                 "W=H={size} {}: Gear-5 costs {:.2}× Verlet per particle-step",
                 p.phase,
                 v / g
-            );
+            )?;
         }
     }
+    Ok(())
 }
 
 /// One row of the LAMMPS peer CSV (the columns this benchmark reads).

@@ -8,7 +8,6 @@ use crate::bench::{
     against_base, medians, peer_rows, throughput_cells, throughput_header, BenchArgs, AGAINST_BASE,
 };
 use repose_physics::bench::heap::{heap_throughput, HeapSteps, LIGGGHTS_HEAP};
-use repose_physics::bench::PhaseThroughput;
 use repose_physics::Scene;
 use std::collections::HashMap;
 use std::path::Path;
@@ -64,35 +63,36 @@ pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         crate::emit(&format!("{}\n", serde_json::to_string_pretty(&phases)?))?;
         return Ok(ExitCode::SUCCESS);
     }
-    println!("{:<9} {}", "phase", throughput_header("LIGGGHTS"));
-    println!("{:<41}   {:^31}", "", "ns per particle-step, by stage");
+    outln!("{:<9} {}", "phase", throughput_header("LIGGGHTS"))?;
+    outln!("{:<41}   {:^31}", "", "ns per particle-step, by stage")?;
     for p in &phases {
-        print_row(p, peer.get(p.phase));
+        outln!("{:<9} {}", p.phase, throughput_cells(p, peer.get(p.phase)))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_row(p: &PhaseThroughput, peer: Option<&f64>) {
-    println!("{:<9} {}", p.phase, throughput_cells(p, peer));
-}
-
 /// Particle-steps per second of each 3D option, pouring and settled.
 fn options(args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    println!(
+    outln!(
         "{:<50} {:>12} {:>8} {:>12} {:>8} {:>9}",
-        "option (2000-sphere heap)", "pour M/s", "× base", "settled M/s", "× base", "contacts"
-    );
+        "option (2000-sphere heap)",
+        "pour M/s",
+        "× base",
+        "settled M/s",
+        "× base",
+        "contacts"
+    )?;
     let mut base: Option<(f64, f64)> = None;
     for (label, overrides) in OPTIONS {
         let phases = heap_throughput(&scene(args, overrides)?, steps(args))?;
         let contacts = 2.0 * phases[1].touching_end as f64 / phases[1].grains_end as f64;
         let costs = against_base(&phases, &mut base);
-        println!("{label:<50} {costs} {contacts:>9.2}");
+        outln!("{label:<50} {costs} {contacts:>9.2}")?;
     }
-    println!("({AGAINST_BASE};");
-    println!(
+    outln!("({AGAINST_BASE};")?;
+    outln!(
         " contacts: grain-grain contacts per grain in the settled heap, which each option shapes)"
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -182,10 +182,11 @@ where
 
 async fn measure(label: &str, store: &Store, args: &BenchServiceArgs) -> anyhow::Result<()> {
     let rate = queue_overhead(store, args.jobs, args.claimers).await?;
-    println!(
+    outln!(
         "{label:<10} queue: {rate:8.0} claim+complete per second ({} no-op jobs, {} claimers)",
-        args.jobs, args.claimers
-    );
+        args.jobs,
+        args.claimers
+    )?;
     for &samples in &args.samples {
         query_latency(label, store, samples).await?;
     }
@@ -209,9 +210,9 @@ async fn query_latency(label: &str, store: &Store, samples: usize) -> anyhow::Re
     })
     .await?;
     let n = store.points(&sweep).await?.len();
-    println!(
+    outln!(
         "{label:<10} query over {samples} samples ({n} points; loaded in {load:.1} s): points {points_med:.2} ms (min {points_min:.2}), figure series {fig_med:.2} ms (min {fig_min:.2})"
-    );
+    )?;
     Ok(())
 }
 
@@ -274,11 +275,11 @@ pub fn run_bench(args: BenchServiceArgs) -> anyhow::Result<ExitCode> {
 
         let one = sweep_time(1, args.sweep_samples).await?;
         let two = sweep_time(2, args.sweep_samples).await?;
-        println!(
+        outln!(
             "sweep      {} fill-and-release samples (4 × 4 box): 1 worker {one:.2} s, 2 workers {two:.2} s, speed-up {:.2}×",
             args.sweep_samples,
             one / two
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     })
 }

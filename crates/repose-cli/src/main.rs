@@ -12,6 +12,14 @@
 //! repose reproduce --preset quick
 //! ```
 
+/// `println!` through [`emit`]: a reader that has closed the pipe comes
+/// back as an error to pass on with `?`, where `println!` would panic.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::emit(&format!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod admin;
 mod bench;
 mod bench3d;

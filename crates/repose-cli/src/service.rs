@@ -265,7 +265,9 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         } else {
             ""
         };
-        println!(
+        // A server whose reader has gone keeps serving: the line is news,
+        // not its work.
+        let _ = outln!(
             "repose: serving http://{addr}/ ({}, {workers} workers{guarded})",
             args.database
         );
