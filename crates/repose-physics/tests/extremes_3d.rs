@@ -167,7 +167,15 @@ fn scene3d() -> impl Strategy<Value = (String, Vec<String>)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+    // The same 24 scenes on every run: a draw of a fine cohesive heap can
+    // take a quarter of an hour where the usual draw takes seconds, so the
+    // suite's cost does not hang on the draw.
+    #![proptest_config(ProptestConfig {
+        cases: 24,
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(12345),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     #[cfg_attr(debug_assertions, ignore = "long: run with --release")]

@@ -16,8 +16,9 @@
 //! cargo run --release -p repose-studies --example glass_fit -- packing \
 //!     data/glass/packing-earth.csv data/glass/packing-gravity.csv
 //! cargo run --release -p repose-studies --example glass_fit -- eq1 \
-//!     1000=data/glass/reduced-net-fading-1mm.csv 250=data/glass/reduced-net-fading-250um.csv \
-//!     100=data/glass/caps-100um.csv --where material.limit_load=net \
+//!     1000=data/glass/reduced-net-fading-1mm.csv 500=data/glass/reduced-net-fading-500um.csv \
+//!     250=data/glass/reduced-net-fading-250um.csv 100=data/glass/caps-100um.csv \
+//!     --where material.limit_load=net \
 //!     --where material.contact_attraction=fading
 //! ```
 
