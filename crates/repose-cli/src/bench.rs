@@ -151,7 +151,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             .iter()
             .map(|(size, scheme, p)| serde_json::json!({ "size": size, "integrator": scheme, "result": p }))
             .collect();
-        crate::emit(&format!("{}\n", serde_json::to_string_pretty(&out)?))?;
+        outln!("{}", serde_json::to_string_pretty(&out)?)?;
     } else {
         print_table(&rows, &lammps)?;
         print_scheme_ratios(&rows)?;

@@ -60,7 +60,7 @@ pub fn heap(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     eprintln!("pouring and settling the 2000-sphere heap ...");
     let phases = heap_throughput(&scene(args, &[])?, steps(args))?;
     if args.json {
-        crate::emit(&format!("{}\n", serde_json::to_string_pretty(&phases)?))?;
+        outln!("{}", serde_json::to_string_pretty(&phases)?)?;
         return Ok(ExitCode::SUCCESS);
     }
     outln!("{:<9} {}", "phase", throughput_header("LIGGGHTS"))?;

@@ -237,7 +237,7 @@ fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         if !args.state {
             report.final_state = None;
         }
-        emit(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
         emit(&summary(&report))?;
     }
