@@ -20,7 +20,22 @@
 use crate::dim::{Dim, Space, Vector};
 use crate::particles::Particles;
 use crate::simulation::boundary::Periodic;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
+
+/// Below this many grains the search stays on one thread: a build then
+/// takes less than sharing it costs.
+const SHARED_SEARCH: usize = 1024;
+
+/// Pairs found by a search, their image shifts (with periodic axes), and
+/// the search's scratch space.
+#[derive(Debug, Default)]
+struct Found<const D: usize> {
+    pairs: Vec<[u32; 2]>,
+    shifts: Vec<Vector<D>>,
+    scratch: Vec<(u32, Vector<D>)>,
+}
 
 /// Verlet pair list with one contact-history slot per pair.
 /// Everything but the scratch space of the search is state: a restored
@@ -110,10 +125,18 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
     /// Rebuilds the list from the current positions, keeping every live
     /// contact history. `range` is the largest gap across which the
     /// contact law acts (0 for contact-only laws); `periodic` the periodic
-    /// axes, whose positions must already be wrapped into the cell.
-    pub fn rebuild(&mut self, p: &Particles<D>, range: f64, periodic: Option<&Periodic<D>>)
-    where
+    /// axes, whose positions must already be wrapped into the cell. On a
+    /// `pool` the search is shared out by ranges of first grains and the
+    /// pieces joined in order: the list is the one a single thread builds.
+    pub fn rebuild(
+        &mut self,
+        p: &Particles<D>,
+        range: f64,
+        periodic: Option<&Periodic<D>>,
+        pool: Option<&rayon::ThreadPool>,
+    ) where
         Dim<D>: Space<D>,
+        H: Sync,
     {
         // Live springs, already sorted by pair.
         self.merged.clear();
@@ -126,22 +149,61 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         let max_radius = p.radius.iter().copied().fold(0.0, f64::max);
         let cell = 2.0 * max_radius + range + self.skin;
         self.collect_images(p, periodic, cell);
-        self.pairs.clear();
-        self.shifts.clear();
+        let mut found = Found {
+            pairs: std::mem::take(&mut self.pairs),
+            shifts: std::mem::take(&mut self.shifts),
+            scratch: std::mem::take(&mut self.scratch),
+        };
+        found.pairs.clear();
+        found.shifts.clear();
         let n = p.len();
-        for i in 0..n {
-            self.near_pairs(p, i, range);
-            self.scratch.sort_unstable_by_key(|e| e.0);
-            self.pairs
-                .extend(self.scratch.iter().map(|&(j, _)| [i as u32, j]));
-            if periodic.is_some() {
-                self.shifts.extend(self.scratch.iter().map(|e| e.1));
+        match pool {
+            Some(pool) if n >= SHARED_SEARCH => {
+                // More pieces than threads: a dense bed and falling grains
+                // above cost unequally.
+                let pieces = pool.current_num_threads() * 4;
+                let parts: Vec<Found<D>> = pool.install(|| {
+                    (0..pieces)
+                        .into_par_iter()
+                        .map(|k| {
+                            let mut part = Found::default();
+                            self.search(p, range, k * n / pieces..(k + 1) * n / pieces, &mut part);
+                            part
+                        })
+                        .collect()
+                });
+                for part in parts {
+                    found.pairs.extend_from_slice(&part.pairs);
+                    found.shifts.extend_from_slice(&part.shifts);
+                }
             }
+            _ => self.search(p, range, 0..n, &mut found),
         }
+        self.pairs = found.pairs;
+        self.shifts = found.shifts;
+        self.scratch = found.scratch;
         self.hand_over_springs();
         self.anchor.clear();
         self.anchor.extend_from_slice(&p.pos);
         self.builds += 1;
+    }
+
+    /// The listed pairs of the first grains `grains`, in order, appended to `out`.
+    fn search(&self, p: &Particles<D>, range: f64, grains: Range<usize>, out: &mut Found<D>)
+    where
+        Dim<D>: Space<D>,
+    {
+        // Periodic axes bin the grains with their images (`collect_images`).
+        let periodic = !self.images.is_empty();
+        for i in grains {
+            self.near_pairs(p, i, range, &mut out.scratch);
+            out.scratch.sort_unstable_by_key(|e| e.0);
+            out.pairs
+                .extend(out.scratch.iter().map(|&(j, _)| [i as u32, j]));
+            if periodic {
+                out.shifts.extend(out.scratch.iter().map(|e| e.1));
+            }
+        }
     }
 
     /// Bins the grains, and with periodic axes their images near the faces.
@@ -167,16 +229,20 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
 
     /// Fills `scratch` with the partners `j > i` of grain `i` within reach,
     /// each with the shift of the image it was found through.
-    fn near_pairs(&mut self, p: &Particles<D>, i: usize, range: f64)
-    where
+    fn near_pairs(
+        &self,
+        p: &Particles<D>,
+        i: usize,
+        range: f64,
+        scratch: &mut Vec<(u32, Vector<D>)>,
+    ) where
         Dim<D>: Space<D>,
     {
-        self.scratch.clear();
+        scratch.clear();
         let n = p.len();
         let xi = p.pos[i];
         let ri = p.radius[i];
         let skin = self.skin;
-        let scratch = &mut self.scratch;
         let image_of = &self.image_of;
         let images = &self.images;
         self.grid.for_each_near(i, |e| {
@@ -365,5 +431,56 @@ impl<const D: usize> CellGrid<D> {
                 f(j);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1500 grains of two sizes scattered through a box, with some
+    /// overlapping and many within the skin.
+    fn scattered() -> Particles<3> {
+        let mut p = Particles::<3>::new(false);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..1500 {
+            let x = Vector::<3>::new(next(), next(), next()) * 12.0;
+            let radius = if next() < 0.5 { 0.5 } else { 0.4 };
+            p.push(x, Vector::<3>::zeros(), radius, 1.0);
+        }
+        p
+    }
+
+    #[test]
+    fn the_shared_search_lists_every_pair_within_reach_as_one_thread_does() {
+        let p = scattered();
+        let (skin, range) = (0.1, 0.05);
+        let mut one = NeighborList::<3, u8>::new(skin);
+        one.rebuild(&p, range, None, None);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let mut two = NeighborList::<3, u8>::new(skin);
+        two.rebuild(&p, range, None, Some(&pool));
+        assert_eq!(one.pairs, two.pairs);
+        // Against every pair by brute force.
+        let mut all = Vec::new();
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                let reach = p.radius[i] + p.radius[j] + range + skin;
+                if (p.pos[i] - p.pos[j]).norm_squared() < reach * reach {
+                    all.push([i as u32, j as u32]);
+                }
+            }
+        }
+        assert!(all.len() > 1000, "{} pairs", all.len());
+        assert_eq!(one.pairs, all);
     }
 }

@@ -327,6 +327,10 @@ fn threads_share_the_pair_and_wall_contacts_without_changing_a_bit() {
     assert_eq!(one.particles.pos, two.particles.pos);
     assert_eq!(one.particles.vel, two.particles.vel);
     assert_eq!(one.particles.omega, two.particles.omega);
+    // The list's search is shared too (1200 grains), images included.
+    assert_eq!(one.neighbors.pairs, two.neighbors.pairs);
+    assert_eq!(one.neighbors.shifts, two.neighbors.shifts);
+    assert!(!one.neighbors.shifts.is_empty());
     assert_eq!(one.neighbors.history, two.neighbors.history);
     // The floor's contacts are shared too, each grain with its own share.
     let on_floor = |s: &Engine| {

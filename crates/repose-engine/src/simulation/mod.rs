@@ -188,6 +188,41 @@ where
     wake: rest::Wake,
 }
 
+/// Runs `f` on a pool thread while the pool's other threads keep looking
+/// for work instead of going to sleep. A shared step hands its threads two
+/// passes of some 50–100 µs; a sleeping thread is woken through the kernel,
+/// which on a virtual machine can take as long as the pass, so that the
+/// thread that shares the work finds none left.
+fn awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    let caller = rayon::current_thread_index();
+    let done = std::sync::atomic::AtomicBool::new(false);
+    rayon::scope(|s| {
+        s.spawn_broadcast(|_, ctx| {
+            if Some(ctx.index()) != caller {
+                while !done.load(std::sync::atomic::Ordering::Acquire) {
+                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                        // Nothing to do: let any other program's thread on
+                        // this core run, and look again.
+                        std::thread::yield_now();
+                    }
+                }
+            }
+        });
+        // Set however `f` ends, so that the scope can close.
+        let _release = Release(&done);
+        f()
+    })
+}
+
+/// Sets its flag when dropped.
+struct Release<'a>(&'a std::sync::atomic::AtomicBool);
+
+impl Drop for Release<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, std::sync::atomic::Ordering::Release);
+    }
+}
+
 /// How often (in steps) the outlet is checked when nothing else forces it.
 const OUTLET_EVERY: u64 = 50;
 
@@ -328,9 +363,8 @@ where
     /// Runs `n` steps.
     pub fn run(&mut self, n: u64) -> Result<(), Blowup> {
         if let Some(pool) = self.pool.clone() {
-            // On one of the pool's threads, so that sharing a step wakes
-            // one thread fewer.
-            return pool.install(|| self.run_here(n));
+            // On one of the pool's threads, the others kept awake meanwhile.
+            return pool.install(|| awake(|| self.run_here(n)));
         }
         self.run_here(n)
     }
@@ -376,8 +410,12 @@ where
             self.sort_spatially();
             self.sorted_at = Some(self.iteration);
         }
-        self.neighbors
-            .rebuild(&self.particles, range, self.periodic.as_ref());
+        self.neighbors.rebuild(
+            &self.particles,
+            range,
+            self.periodic.as_ref(),
+            self.pool.as_deref(),
+        );
         self.wall_contacts
             .rebuild(&self.walls, &self.particles, self.neighbors.skin);
         self.counters.list_builds += 1;

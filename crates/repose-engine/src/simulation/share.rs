@@ -31,8 +31,11 @@ use std::ops::Range;
 /// A share's crossing responses and its largest overlap.
 type Crossing<const D: usize> = (Vec<Option<Response<D>>>, (f64, usize));
 
-/// Shares of the grains per thread.
-const SHARES_PER_THREAD: usize = 4;
+/// Shares of the grains per thread: two let a thread that finishes a cheap
+/// share take another (a dense bed below, falling grains above), and each
+/// share more adds a boundary whose crossing pairs cost a second visit
+/// (two ran the bench heap 10–15 % faster than four; `docs/benchmarks.md`).
+const SHARES_PER_THREAD: usize = 2;
 
 /// How the current pair list is shared among the threads.
 #[derive(Debug, Default)]
