@@ -18,6 +18,7 @@
 //! cargo run --release -p repose-studies --example glass_fit -- eq1 \
 //!     1000=data/glass/reduced-net-fading-1mm.csv 500=data/glass/reduced-net-fading-500um.csv \
 //!     250=data/glass/reduced-net-fading-250um.csv 100=data/glass/caps-100um.csv \
+//!     100=data/glass/reduced-net-fading-100um.csv \
 //!     --where material.limit_load=net \
 //!     --where material.contact_attraction=fading
 //! ```

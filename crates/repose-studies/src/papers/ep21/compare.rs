@@ -18,7 +18,7 @@ use repose_store::Aggregate;
 /// glass's modulus, then the preset's softening on top, and the form
 /// whose glass-stiff heaps meet eq. 1.
 const HEAPS_DIFFER: &str =
-    "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost). With the limits on the net normal force and the attraction fading in contact, glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.508 ± 0.010 and D_E = 99 ± 7 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv)";
+    "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost). With the limits on the net normal force and the attraction fading in contact, glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv)";
 
 /// Why the packings' constants differ, as measured on glass-stiff
 /// columns: the column's height, then softening.
