@@ -167,7 +167,8 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
                         .into_par_iter()
                         .map(|k| {
                             let mut part = Found::default();
-                            self.search(p, range, k * n / pieces..(k + 1) * n / pieces, &mut part);
+                            let grains = k * n / pieces..(k + 1) * n / pieces;
+                            self.search(p, range, periodic.is_some(), grains, &mut part);
                             part
                         })
                         .collect()
@@ -177,7 +178,7 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
                     found.shifts.extend_from_slice(&part.shifts);
                 }
             }
-            _ => self.search(p, range, 0..n, &mut found),
+            _ => self.search(p, range, periodic.is_some(), 0..n, &mut found),
         }
         self.pairs = found.pairs;
         self.shifts = found.shifts;
@@ -188,13 +189,18 @@ impl<const D: usize, H: Copy + Default + PartialEq> NeighborList<D, H> {
         self.builds += 1;
     }
 
-    /// The listed pairs of the first grains `grains`, in order, appended to `out`.
-    fn search(&self, p: &Particles<D>, range: f64, grains: Range<usize>, out: &mut Found<D>)
-    where
+    /// The listed pairs of the first grains `grains`, in order, appended to
+    /// `out`, with their image shifts when the axes are `periodic`.
+    fn search(
+        &self,
+        p: &Particles<D>,
+        range: f64,
+        periodic: bool,
+        grains: Range<usize>,
+        out: &mut Found<D>,
+    ) where
         Dim<D>: Space<D>,
     {
-        // Periodic axes bin the grains with their images (`collect_images`).
-        let periodic = !self.images.is_empty();
         for i in grains {
             self.near_pairs(p, i, range, &mut out.scratch);
             out.scratch.sort_unstable_by_key(|e| e.0);
