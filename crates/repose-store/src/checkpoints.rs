@@ -1,10 +1,17 @@
 //! Checkpoints of running jobs: the latest saved state of a long sample,
 //! written by the worker that holds the job's lease and read by whichever
-//! worker runs the job next. The physics decides what the bytes hold; the
-//! store keeps them whole.
+//! worker runs the sample next — the job's own, or another sweep's job of
+//! the same sample (a study queued again goes on where the first copy
+//! stopped). The physics decides what the bytes hold; the store keeps them
+//! whole.
 
 use crate::{now_ms, Result, Store};
 use sqlx::Row;
+
+/// The step of the furthest checkpoint of the sample of the job being
+/// updated (`jobs`), over every job of that sample.
+pub(crate) const FURTHEST_STEP: &str = "SELECT MAX(c.iteration) FROM checkpoints c \
+     JOIN jobs s ON s.id = c.job_id WHERE s.sample_hash = jobs.sample_hash";
 
 /// A checkpoint as stored.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,13 +65,31 @@ impl Store {
         .bind(job_id)
         .fetch_optional(&self.pool)
         .await?;
-        Ok(row.map(|r| StoredCheckpoint {
-            job_id: r.get("job_id"),
-            owner: r.get("owner"),
-            sim_time: r.get("sim_time"),
-            iteration: r.get("iteration"),
-            state: r.get("state"),
-            saved_at: r.get("saved_at"),
-        }))
+        Ok(row.map(stored))
+    }
+
+    /// The checkpoint to resume a sample from: the furthest saved by any job
+    /// of it (the same sample queued by several sweeps shares its progress).
+    pub async fn furthest_checkpoint(&self, sample_hash: &str) -> Result<Option<StoredCheckpoint>> {
+        let row = sqlx::query(&self.sql(
+            "SELECT c.job_id, c.owner, c.sim_time, c.iteration, c.state, c.saved_at \
+             FROM checkpoints c JOIN jobs j ON j.id = c.job_id WHERE j.sample_hash = $1 \
+             ORDER BY c.iteration DESC, c.saved_at DESC LIMIT 1",
+        ))
+        .bind(sample_hash)
+        .fetch_optional(&self.pool)
+        .await?;
+        Ok(row.map(stored))
+    }
+}
+
+fn stored(r: sqlx::any::AnyRow) -> StoredCheckpoint {
+    StoredCheckpoint {
+        job_id: r.get("job_id"),
+        owner: r.get("owner"),
+        sim_time: r.get("sim_time"),
+        iteration: r.get("iteration"),
+        state: r.get("state"),
+        saved_at: r.get("saved_at"),
     }
 }

@@ -2,6 +2,7 @@
 //! lease, and each job ends done (its result written in the same
 //! transaction), handed back, or failed.
 
+use crate::checkpoints::FURTHEST_STEP;
 use crate::{
     now_ms, Backend, Claim, Created, Lease, NewJob, NewSweep, Result, ResultRecord, Store,
     StoreError,
@@ -121,20 +122,20 @@ impl Store {
         let expires = now + lease.as_millis() as i64;
         let mut conn = self.pool.acquire().await?;
         // One seek in `jobs_next`: queued jobs belong to active sweeps only.
-        let pick = match self.backend {
-            Backend::Sqlite => {
-                "SELECT id FROM jobs WHERE state = 'queued' \
-                 ORDER BY priority DESC, sweep_created, sweep_id, seq LIMIT 1"
-            }
-            Backend::Postgres => {
-                "SELECT id FROM jobs WHERE state = 'queued' \
-                 ORDER BY priority DESC, sweep_created, sweep_id, seq LIMIT 1 FOR UPDATE SKIP LOCKED"
-            }
+        // A sample another job is already running (the same sample queued
+        // by two sweeps) waits: it ends done with that job's result.
+        let pick = "SELECT q.id FROM jobs q WHERE q.state = 'queued' \
+             AND NOT EXISTS (SELECT 1 FROM jobs r WHERE r.sample_hash = q.sample_hash AND r.state = 'running') \
+             ORDER BY q.priority DESC, q.sweep_created, q.sweep_id, q.seq LIMIT 1";
+        let lock = match self.backend {
+            Backend::Sqlite => "",
+            Backend::Postgres => " FOR UPDATE SKIP LOCKED",
         };
+        // The step it resumes from: the furthest checkpoint of its sample.
         let claim_sql = self.sql(&format!(
             "UPDATE jobs SET state = 'running', lease_owner = $1, lease_expires = $2, attempts = attempts + 1, updated_at = $3, \
-             resume_step = (SELECT c.iteration FROM checkpoints c WHERE c.job_id = jobs.id) \
-             WHERE id = ({pick}) RETURNING id, sweep_id, sample_hash, scene, attempts"
+             resume_step = ({FURTHEST_STEP}) \
+             WHERE id = ({pick}{lock}) RETURNING id, sweep_id, sample_hash, scene, attempts"
         ));
         let begin = match self.backend {
             Backend::Sqlite => "BEGIN IMMEDIATE",
@@ -261,10 +262,21 @@ impl Store {
         .bind(result.counts.particle_steps)
         .execute(&mut *tx)
         .await?;
-        sqlx::query(&self.sql("DELETE FROM checkpoints WHERE job_id = $1"))
-            .bind(job_id)
-            .execute(&mut *tx)
-            .await?;
+        // The same sample queued by other sweeps is done with this result,
+        // and no checkpoint of it is needed any more.
+        sqlx::query(&self.sql(
+            "DELETE FROM checkpoints WHERE job_id IN (SELECT id FROM jobs WHERE sample_hash = $1)",
+        ))
+        .bind(sample_hash)
+        .execute(&mut *tx)
+        .await?;
+        sqlx::query(&self.sql(
+            "UPDATE jobs SET state = 'done', updated_at = $1 WHERE sample_hash = $2 AND state = 'queued'",
+        ))
+        .bind(now)
+        .bind(sample_hash)
+        .execute(&mut *tx)
+        .await?;
         if inserted.rows_affected() == 1 {
             let failed = result.outcome != "completed";
             self.aggregate_result(&mut tx, sample_hash, failed, &result.metrics)

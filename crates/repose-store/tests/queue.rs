@@ -424,3 +424,82 @@ async fn the_sweep_list_gives_each_sweep_its_own_progress_cost_and_eta() {
     })
     .await;
 }
+
+#[tokio::test]
+async fn a_sample_queued_by_two_sweeps_runs_once_from_its_furthest_checkpoint() {
+    each_backend(|store| async move {
+        let (first, jobs) = sweep(1, &[0.2]);
+        let a = store.create_sweep(&first, &jobs, 3).await.unwrap();
+        let j1 = store
+            .claim("w1", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert!(store
+            .save_checkpoint(&j1.job_id, "w1", 0.1, 100, b"at 100")
+            .await
+            .unwrap());
+        // The same sample queued again, more urgently, while it runs.
+        let (mut again, again_jobs) = sweep(1, &[0.2]);
+        again.priority = 10;
+        let b = store.create_sweep(&again, &again_jobs, 3).await.unwrap();
+        assert_eq!(b.reused, 0, "no result yet");
+        assert!(
+            store
+                .claim("w2", Duration::from_secs(60))
+                .await
+                .unwrap()
+                .is_none(),
+            "a sample runs on one worker at a time"
+        );
+        // Handed back, the urgent copy goes on from the first one's checkpoint.
+        assert!(store.release(&j1.job_id, "w1").await.unwrap());
+        let j2 = store
+            .claim("w2", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(j2.sweep_id, b.id);
+        let from = store.furthest_checkpoint(&j2.sample_hash).await.unwrap();
+        assert_eq!(
+            from.map(|c| (c.iteration, c.state)),
+            Some((100, b"at 100".to_vec()))
+        );
+        assert!(store
+            .save_checkpoint(&j2.job_id, "w2", 0.2, 200, b"at 200")
+            .await
+            .unwrap());
+        assert!(store.release(&j2.job_id, "w2").await.unwrap());
+        // Whichever copy runs next goes on from the furthest checkpoint.
+        let c = store
+            .claim("w1", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.job_id, j2.job_id, "priority still orders the claims");
+        let resumed = store.furthest_checkpoint(&c.sample_hash).await.unwrap();
+        assert_eq!(resumed.map(|c| c.iteration), Some(200));
+        assert!(store
+            .complete(&c.job_id, "w1", &c.sample_hash, &report())
+            .await
+            .unwrap());
+        // One run, both sweeps done with its result, no checkpoint left.
+        for sweep in [&a.id, &b.id] {
+            let p = store.progress(sweep).await.unwrap();
+            assert_eq!((p.done, p.queued, p.running), (1, 0, 0), "sweep {sweep}");
+            let points = store.points(sweep).await.unwrap();
+            assert_eq!(points[0].samples, 1);
+        }
+        assert!(store
+            .furthest_checkpoint(&c.sample_hash)
+            .await
+            .unwrap()
+            .is_none());
+        assert!(store
+            .claim("w1", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .is_none());
+    })
+    .await;
+}

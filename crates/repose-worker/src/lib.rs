@@ -11,9 +11,12 @@
 //!
 //! A long sample (a heap, a packing or a free run) saves a checkpoint every
 //! `checkpoint_every` while it runs; the worker writes it to the store
-//! under its lease. A worker that claims a job with a checkpoint (its
-//! first worker died) continues from it, and the result is the one the
-//! first worker would have written, bit for bit.
+//! under its lease. A worker that claims a job whose sample has a
+//! checkpoint (its first worker died, or another sweep's job of the same
+//! sample stopped) continues from the furthest one, and the result is the
+//! one the first worker would have written, bit for bit. Two jobs of one
+//! sample never run at once: the second waits and ends done with the
+//! first one's result.
 //!
 //! A run that ends without a result (not settled, blow-up) is still a
 //! result: its outcome and reason are stored like any other. Only a scene
@@ -335,9 +338,10 @@ async fn run_leased(
     (outcome, stop.load(Ordering::Relaxed), lease)
 }
 
-/// The checkpoint a job's earlier worker saved, if any.
+/// The furthest checkpoint saved for the job's sample, if any: by an
+/// earlier worker of this job, or of the same sample queued by another sweep.
 async fn stored_checkpoint(store: &Store, job: &Claim) -> Option<Checkpoint> {
-    match store.checkpoint(&job.job_id).await {
+    match store.furthest_checkpoint(&job.sample_hash).await {
         Ok(found) => found.map(|c| Checkpoint {
             time: c.sim_time,
             iteration: u64::try_from(c.iteration).unwrap_or(0),
