@@ -208,6 +208,8 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
             "2",
         ])
         .args(["--preset", "quick", "-q", "--server", &server.url])
+        // A variant of the model: the limits on the net normal force.
+        .args(["--set", "material.limit_load=net"])
         .arg("--out")
         .arg(&out)
         .output()
@@ -232,6 +234,13 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
     }
     let sweeps = numbers["sweeps"].as_array().unwrap();
     assert_eq!(sweeps.len(), 3);
+    assert_eq!(numbers["variant"], r#"material.limit_load = "net""#);
+    assert!(markdown.contains(r#"a variant of the model: material.limit_load = "net""#));
+    for sweep in sweeps {
+        let id = sweep["id"].as_str().unwrap();
+        let stored = get(&format!("{}/api/sweeps/{id}", server.url)).await;
+        assert_eq!(stored["spec"]["base"]["material"]["limit_load"], "net");
+    }
     let metrics = ["theta_r", "surface_roughness", "packing_fraction"];
     let checked = points_match_samples(&server, sweeps, &markdown, &metrics).await;
     assert!(checked >= 8, "only {checked} aggregates checked");

@@ -180,6 +180,17 @@ impl ApiError {
         }
     }
 
+    /// The same error with each field `rename` maps renamed (a field of
+    /// the sweep a request was turned into, named as the request named it).
+    fn renamed(mut self, rename: impl Fn(&str) -> Option<String>) -> Self {
+        for e in &mut self.errors {
+            if let Some(name) = rename(&e.field) {
+                e.field = name;
+            }
+        }
+        self
+    }
+
     fn field(status: StatusCode, field: impl Into<String>, message: impl Into<String>) -> Self {
         let (field, message) = (field.into(), message.into());
         ApiError {

@@ -155,6 +155,11 @@ pub struct QueueRequest {
     /// The small version of the sweep (tests, previews).
     #[serde(default)]
     pub reduced: bool,
+    /// A variant of the model: dotted scene paths and the value each
+    /// scene of the sweep takes, e.g. `{"material.limit_load": "net"}`.
+    #[serde(default)]
+    #[schema(value_type = Object)]
+    pub set: BTreeMap<String, Value>,
 }
 
 /// Queue the sweep behind a paper's figures: the same sweep the page's
@@ -181,15 +186,27 @@ pub async fn queue(
     } else {
         parse_body(&body)?
     };
-    let spec = sweep.spec(
-        p.key,
-        Queue {
-            fidelity: request.fidelity.unwrap_or_default(),
-            samples: request.samples,
-            reduced: request.reduced,
-        },
-    );
-    enqueue(&s.store, &spec).await
+    let queue = Queue {
+        fidelity: request.fidelity.unwrap_or_default(),
+        samples: request.samples,
+        reduced: request.reduced,
+        set: request.set.into_iter().collect(),
+    };
+    let spec = sweep.spec(p.key, &queue).map_err(|e| {
+        ApiError::field(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            format!("set.{}", e.field),
+            e.message,
+        )
+    })?;
+    // A scene the variant makes invalid names the setting it came from.
+    enqueue(&s.store, &spec).await.map_err(|e| {
+        e.renamed(|field| {
+            let key = field.strip_prefix("base.")?;
+            let set = queue.set.iter().any(|(k, _)| k == key);
+            set.then(|| format!("set.{key}"))
+        })
+    })
 }
 
 #[derive(Debug, Deserialize, utoipa::IntoParams)]

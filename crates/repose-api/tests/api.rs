@@ -273,6 +273,52 @@ async fn a_papers_sweep_is_queued_by_its_key_and_reused_when_queued_again() {
 }
 
 #[tokio::test]
+async fn a_papers_sweep_runs_a_variant_of_the_model_when_asked() {
+    let s = store().await;
+    let body = json!({"fidelity": "quick", "reduced": true,
+        "set": {"material.limit_load": "net", "material.contact_attraction": "fading"}});
+    let (status, created, text) = call(
+        &s,
+        "POST",
+        "/api/studies/ep21/sweeps/heaps",
+        Some(&body.to_string()),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    let id = created["id"].as_str().unwrap();
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(sweep["spec"]["base"]["material"]["limit_load"], "net");
+    assert_eq!(
+        sweep["spec"]["base"]["material"]["contact_attraction"],
+        "fading"
+    );
+    // The paper's own settings stay where the variant says nothing.
+    assert_eq!(sweep["spec"]["base"]["material"]["rolling_friction"], 0.05);
+    let name = sweep["name"].as_str().unwrap();
+    assert!(
+        name.ends_with(r#"[material.contact_attraction = "fading", material.limit_load = "net"]"#),
+        "{name}"
+    );
+    for (set, field) in [
+        (json!({"grains.diameter": 1e-3}), "set.grains.diameter"),
+        (
+            json!({"material.limit_load": "sideways"}),
+            "set.material.limit_load",
+        ),
+        (
+            json!({"material.friction.mu": 0.3}),
+            "set.material.friction",
+        ),
+    ] {
+        let body = json!({"reduced": true, "set": set}).to_string();
+        let (got, json, text) =
+            call(&s, "POST", "/api/studies/ep21/sweeps/heaps", Some(&body)).await;
+        assert_eq!(got, StatusCode::UNPROCESSABLE_ENTITY, "{body}: {text}");
+        assert_eq!(json["errors"][0]["field"], field, "{body}: {text}");
+    }
+}
+
+#[tokio::test]
 async fn the_files_of_docs_are_served_by_name_and_nothing_else_is() {
     let s = store().await;
     let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;

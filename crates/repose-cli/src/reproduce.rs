@@ -38,6 +38,10 @@ pub struct ReproduceArgs {
     /// Samples (seeds) per point; by default the paper's count.
     #[arg(long)]
     samples: Option<u32>,
+    /// A variant of the model, `key=value` (repeatable): every scene of
+    /// every sweep takes it, e.g. `--set material.limit_load=net`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// The Markdown report of one paper; figures (SVG) and the numbers
     /// (JSON) go beside it. By default the paper's own report file in
     /// --out-dir (`reproduction.md` for lh93, `reproduction-ep21.md` for ep21).
@@ -64,6 +68,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
     if args.samples == Some(0) {
         bail!("--samples must be at least 1");
     }
+    variant(&args)?;
     if let Some(json) = &args.rewrite {
         return rewrite(json);
     }
@@ -191,7 +196,9 @@ async fn queue_all(
     paper: &Paper,
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
-    let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced});
+    let set = variant(args)?;
+    let set: serde_json::Map<String, Value> = set.into_iter().collect();
+    let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced, "set": set});
     let mut out = Vec::new();
     for st in (paper.sweeps)() {
         let url = format!("{server}/api/studies/{}/sweeps/{}", paper.key, st.key);
@@ -322,6 +329,11 @@ async fn reproduce(
             args.preset,
         ),
         metric_labels: metric_labels(paper),
+        variant: repose_studies::paper::Queue {
+            set: variant(args)?,
+            ..Default::default()
+        }
+        .variant(),
     };
     report
         .write(&out)
@@ -331,11 +343,25 @@ async fn reproduce(
     Ok(ExitCode::SUCCESS)
 }
 
+/// The `--set` assignments, read as the scene's own overrides are.
+fn variant(args: &ReproduceArgs) -> anyhow::Result<Vec<(String, Value)>> {
+    args.set
+        .iter()
+        .map(|a| {
+            repose_physics::doc::parse_assignment(a)
+                .map_err(|e| anyhow::anyhow!("--set {}: {}", e.field, e.message))
+        })
+        .collect()
+}
+
 fn command(args: &ReproduceArgs, paper: &Paper) -> String {
     let mut c = format!(
         "repose reproduce --paper {} --preset {}",
         paper.key, args.preset
     );
+    for a in &args.set {
+        c.push_str(&format!(" --set {a}"));
+    }
     if let Some(n) = args.samples {
         c.push_str(&format!(" --samples {n}"));
     }

@@ -6,6 +6,7 @@ use crate::compare::Comparison;
 use crate::data::StudyData;
 use crate::figure::{Figure, FigureSummary};
 use crate::quantity::Quantity;
+use repose_physics::doc::{self, DocError};
 use repose_physics::Preset;
 use repose_sweeps::SweepSpec;
 use serde::Serialize;
@@ -102,29 +103,57 @@ pub struct Reduced {
 }
 
 /// How to queue a study sweep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Queue {
     pub fidelity: Preset,
     /// Samples a point, if not the paper's count.
     pub samples: Option<u32>,
     /// The small version.
     pub reduced: bool,
+    /// A variant of the model: dotted scene paths and the values every
+    /// scene of the sweep takes (`material.limit_load = "net"`), over the
+    /// paper's base; not an axis of the sweep.
+    pub set: Vec<(String, Value)>,
+}
+
+impl Queue {
+    /// The variant as a list, `material.limit_load = "net", …` (empty for
+    /// the paper's own model).
+    pub fn variant(&self) -> String {
+        let parts: Vec<String> = self.set.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        parts.join(", ")
+    }
 }
 
 impl StudySweep {
     /// The sweep spec that queues it: the same for the page, the API and
-    /// `repose reproduce`.
-    pub fn spec(&self, paper: &str, q: Queue) -> SweepSpec {
+    /// `repose reproduce`. Fails, naming the path, where a setting of the
+    /// variant cannot be set or sets one of the sweep's axes.
+    pub fn spec(&self, paper: &str, q: &Queue) -> Result<SweepSpec, DocError> {
         let (base, axes, samples) = if q.reduced {
             let r = &self.reduced;
             (r.base.clone(), r.axes.clone(), r.samples)
         } else {
             (self.base.clone(), self.axes.clone(), self.samples)
         };
-        SweepSpec {
-            name: Some(format!("{paper}: {}", self.title)),
+        let mut base = base.as_object().cloned().unwrap_or_else(Map::new);
+        for (key, value) in &q.set {
+            if axes.contains_key(key) {
+                return Err(DocError {
+                    field: key.clone(),
+                    message: format!("is an axis of the sweep `{}`, not a setting", self.key),
+                });
+            }
+            doc::set(&mut base, key, value.clone())?;
+        }
+        let name = match q.variant() {
+            v if v.is_empty() => format!("{paper}: {}", self.title),
+            v => format!("{paper}: {} [{v}]", self.title),
+        };
+        Ok(SweepSpec {
+            name: Some(name),
             protocol: self.protocol.to_string(),
-            base: base.as_object().cloned().unwrap_or_else(Map::new),
+            base,
             axes,
             samples: q.samples.unwrap_or(samples),
             target_sem: None,
@@ -134,7 +163,7 @@ impl StudySweep {
             seed_base: 0,
             priority: self.priority,
             study: Some(format!("{paper}/{}", self.key)),
-        }
+        })
     }
 }
 

@@ -49,6 +49,10 @@ pub struct Reproduction {
     /// Labels of the metrics the tables show, by name.
     #[serde(default)]
     pub metric_labels: Vec<(String, String)>,
+    /// The variant of the model every scene ran with (`--set`), empty for
+    /// the paper's own.
+    #[serde(default)]
+    pub variant: String,
 }
 
 /// A static chart of a figure's data.
@@ -175,6 +179,13 @@ impl Reproduction {
              Error bars are the sample standard deviation, as in the paper.\n",
             self.command, self.engine, self.preset, self.preset_settings, self.cores
         );
+        if !self.variant.is_empty() {
+            let _ = writeln!(
+                s,
+                "Every scene ran a variant of the model: {}, over the paper's own settings.\n",
+                self.variant
+            );
+        }
         let _ = writeln!(s, "## Cost\n");
         s.push_str(&self.breakdown());
         let _ = writeln!(
