@@ -275,3 +275,71 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
         numbers["wall_time_s"].as_f64().unwrap()
     );
 }
+
+/// The count a one-number query gives on the store.
+async fn count(store: &repose_store::Store, sql: &str) -> i64 {
+    sqlx::query_scalar(sql)
+        .fetch_one(store.pool())
+        .await
+        .unwrap()
+}
+
+/// Stopped by SIGTERM, a reproduction with its own workers hands its
+/// running samples back to its database; the same command goes on from
+/// their checkpoints, and every sample runs once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_stopped_reproduction_goes_on_where_it_stopped() {
+    let db = format!("sqlite://{}", scratch("repro-stopped.db").display());
+    let store = repose_store::Store::open(&db).await.unwrap();
+    let out = scratch("stopped").with_file_name("reproduction-ep21.md");
+    let command = || {
+        let mut c = Command::new(BIN);
+        c.args([
+            "reproduce",
+            "--paper",
+            "ep21",
+            "--reduced",
+            "--samples",
+            "1",
+        ])
+        .args(["--preset", "quick", "-q", "--workers", "2"])
+        .args(["--checkpoint-every", "0.2", "--database", &db])
+        .arg("--out")
+        .arg(&out)
+        .env("REPOSE_LOG", "info")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+        c
+    };
+    let first = command().spawn().expect("repose reproduce starts");
+    let start = std::time::Instant::now();
+    while count(&store, "SELECT COUNT(*) FROM checkpoints").await == 0 {
+        assert!(start.elapsed().as_secs() < 120, "no checkpoint");
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    common::signal(&first, "TERM");
+    let stopped = tokio::task::spawn_blocking(|| first.wait_with_output())
+        .await
+        .unwrap()
+        .unwrap();
+    let said = String::from_utf8_lossy(&stopped.stderr);
+    assert!(!stopped.status.success(), "{said}");
+    assert!(
+        said.contains("stopped: the running samples go back"),
+        "{said}"
+    );
+    let running = "SELECT COUNT(*) FROM jobs WHERE state = 'running'";
+    assert_eq!(count(&store, running).await, 0, "handed back: {said}");
+    assert!(count(&store, "SELECT COUNT(*) FROM checkpoints").await > 0);
+
+    let again = command().output().expect("repose reproduce runs again");
+    let said = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success(), "{said}");
+    assert!(said.contains("continuing from the checkpoint"), "{said}");
+    let open = "SELECT COUNT(*) FROM jobs WHERE state <> 'done'";
+    assert_eq!(count(&store, open).await, 0);
+    let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM results").await, samples);
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM checkpoints").await, 0);
+    assert!(out.exists(), "the report is written");
+}

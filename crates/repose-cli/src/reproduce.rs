@@ -12,6 +12,7 @@ use repose_studies::data::{StudyData, SweepData};
 use repose_studies::paper::Paper;
 use repose_studies::papers;
 use repose_studies::reproduction::{DoneSweep, Reproduction};
+use repose_worker::shutdown_on_signals;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -29,6 +30,8 @@ pub struct ReproduceArgs {
     /// Embedded workers (default: one per core).
     #[arg(long)]
     workers: Option<usize>,
+    #[command(flatten)]
+    lease: LeaseArgs,
     /// The paper to reproduce (its study key), or `all` for every paper.
     #[arg(long, default_value = "lh93")]
     paper: String,
@@ -166,7 +169,7 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     let workers = args
         .workers
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let handles = spawn_workers(&store, workers, &LeaseArgs::default(), false, &rx)?;
+    let handles = spawn_workers(&store, workers, &args.lease, false, &rx)?;
     let mut stop_rx = rx.clone();
     let app = repose_api::app(store);
     let task = tokio::spawn(async move {
@@ -180,7 +183,18 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
         "repose: reproducing on http://{addr}/ ({}, {workers} workers)",
         args.database
     );
-    let result = reproduce_all(args, papers, &format!("http://{addr}")).await;
+    // SIGTERM or Ctrl-C hands the running samples back with the store;
+    // the same command on the same database goes on from there.
+    let mut signalled = shutdown_on_signals();
+    let url = format!("http://{addr}");
+    let result = tokio::select! {
+        r = reproduce_all(args, papers, &url) => r,
+        _ = signalled.wait_for(|s| *s) => Err(anyhow::anyhow!(
+            "stopped: the running samples go back to the queue in {}; the same \
+             command goes on from their latest checkpoints",
+            args.database
+        )),
+    };
     let _ = tx.send(true);
     for h in handles {
         let _ = h.await;
