@@ -21,9 +21,10 @@ const HEAPS_DIFFER: &str =
     "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost). With the limits on the net normal force and the attraction fading in contact, glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv)";
 
 /// Why the packings' constants differ, as measured on glass-stiff
-/// columns: the column's height, then softening.
+/// columns: the column's height, softening, and the forms that fade the
+/// attraction in contact.
 const PACKING_DIFFERS: &str =
-    "the paper's value lies outside our 95 % interval. Measured cause: a cohesive column released from lower than the paper's 100 d, or softened, packs fine grains looser. At glass's 63 GPa on the paper's height the study's columns fit φ_∞ = 0.574, C = 0.547 and D_φ = 108 µm, each of the paper's constants inside the interval; released from 40 d (`quick`'s column) 200 µm on Earth packs at 0.496 against 0.529, and D_φ grows to 186 µm; softened as the heaps are (κ = 10⁶) D_φ = 323 µm on Earth (docs/model-3d.md, data/glass/packing-*.csv)";
+    "the paper's value lies outside our 95 % interval. Measured cause: a cohesive column released from lower than the paper's 100 d, or softened, packs fine grains looser. At glass's 63 GPa on the paper's height the study's columns fit φ_∞ = 0.574, C = 0.547 and D_φ = 108 µm, each of the paper's constants inside the interval; released from 40 d (`quick`'s column) 200 µm on Earth packs at 0.496 against 0.529, and D_φ grows to 186 µm; softened as the heaps are (κ = 10⁶) D_φ = 323 µm on Earth. With the attraction fading in contact (the form whose heaps fit eq. 1) glass-stiff columns of the paper's height pack at 0.564 (100 µm) and 0.579 (200 µm) against the paper's curve's 0.449 and 0.524: a pair held by its attraction alone leaves the limits no net load, so its grains roll into a dense bed (docs/model-3d.md, data/glass/packing-*.csv)";
 
 pub fn compare(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
