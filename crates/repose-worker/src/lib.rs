@@ -14,9 +14,9 @@
 //! under its lease. A worker that claims a job whose sample has a
 //! checkpoint (its first worker died, or another sweep's job of the same
 //! sample stopped) continues from the furthest one, and the result is the
-//! one the first worker would have written, bit for bit. Two jobs of one
-//! sample never run at once: the second waits and ends done with the
-//! first one's result.
+//! one the first worker would have written, bit for bit. A job whose
+//! sample another job is running waits, and ends done with that job's
+//! result (on PostgreSQL two claims in the same instant may both run it).
 //!
 //! A run that ends without a result (not settled, blow-up) is still a
 //! result: its outcome and reason are stored like any other. Only a scene
