@@ -38,7 +38,7 @@ pub struct Reproduction {
     pub preset_settings: String,
     pub reduced: bool,
     pub cores: usize,
-    /// Wall time of the whole reproduction, s.
+    /// Wall time of the run that wrote it, s.
     pub wall_time_s: f64,
     pub sweeps: Vec<DoneSweep>,
     pub figures: Vec<FigureData>,
@@ -161,7 +161,7 @@ impl Reproduction {
         );
         let _ = writeln!(
             s,
-            "\nWall time of the whole reproduction: {:.1} s ({:.1} min).",
+            "\nWall time of this run: {:.1} s ({:.1} min); samples reused from an earlier run, or resumed from its checkpoints, ran before it.",
             self.wall_time_s,
             self.wall_time_s / 60.0
         );
