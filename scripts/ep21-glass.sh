@@ -7,9 +7,8 @@
 #
 #   cargo build --release && scripts/ep21-glass.sh
 #
-# SIGTERM or Ctrl-C hands the running samples back to the store, whose
-# checkpoints are at most five minutes old; running the script again goes
-# on from there. While the reproduction is unfinished the store is kept in
+# SIGTERM or Ctrl-C saves the running samples and hands them back to the
+# store; running the script again goes on from there. While the reproduction is unfinished the store is kept in
 # the repository (a copy made by `repose backup` after the run stopped), so
 # that it goes on from its last checkpoints on the next machine. When it
 # finishes it writes docs/reproduction-ep21-glass.md.

@@ -2,7 +2,9 @@
 //! every second and is killed with SIGKILL mid-pour; a second worker takes
 //! the job over once the lease runs out, continues from the checkpoint,
 //! and stores the result an uninterrupted run of the same scene gives, bit
-//! for bit. On SQLite and on PostgreSQL.
+//! for bit. On SQLite and on PostgreSQL. A worker stopped with SIGTERM
+//! saves the heap before it hands the job back, however long ago its last
+//! checkpoint was.
 
 use repose_physics::{Quiet, Scene};
 use repose_store::Store;
@@ -32,6 +34,11 @@ fn spec() -> SweepSpec {
 }
 
 fn start_worker(database: &str) -> Child {
+    worker_saving_every(database, "1")
+}
+
+/// A worker on `database` that saves a running sample every `seconds`.
+fn worker_saving_every(database: &str, seconds: &str) -> Child {
     Command::new(BIN)
         .args(["worker", "--database", database])
         .args([
@@ -40,7 +47,7 @@ fn start_worker(database: &str) -> Child {
             "--heartbeat",
             "1",
             "--checkpoint-every",
-            "1",
+            seconds,
         ])
         .env("REPOSE_LOG", "repose_worker=info")
         .stderr(Stdio::piped())
@@ -180,4 +187,77 @@ async fn a_killed_workers_heap_resumes_bit_for_bit_on_postgres() {
     resumes_after_a_kill(pg.url()).await;
     let store = Store::open(pg.url()).await.unwrap();
     repose_testkit::drop_postgres(pg, store).await;
+}
+
+/// Every simulated number of the scene of the store's one job, run here
+/// without a stop.
+async fn uninterrupted(store: &Store) -> repose_physics::RunReport {
+    let scene: String = sqlx::query_scalar("SELECT scene FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    let scene = Scene::from_stored(serde_json::from_str(&scene).unwrap()).unwrap();
+    repose_physics::run(&scene, &mut Quiet).unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_heap_handed_back_on_sigterm_is_saved_first_and_resumes_bit_for_bit() {
+    let database = format!("sqlite://{}", scratch("hand-back.db").display());
+    let store = Store::open(&database).await.unwrap();
+    let (created, _) = create(&store, &spec(), 3).await;
+    // Checkpoints ten minutes apart: none falls due during the run.
+    let mut first = worker_saving_every(&database, "600");
+    wait_for("the pour under way", || async {
+        let p = store.progress(&created.id).await.unwrap();
+        (p.running == 1).then_some(())
+    })
+    .await;
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    signal(&first, "TERM");
+    let status = first.wait().unwrap();
+    assert!(status.success());
+    let job: String = sqlx::query_scalar("SELECT id FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    let saved = store
+        .checkpoint(&job)
+        .await
+        .unwrap()
+        .expect("a checkpoint saved on the way out");
+    let p = store.progress(&created.id).await.unwrap();
+    assert_eq!((p.queued, p.running, p.done), (1, 0, 0));
+
+    let mut second = worker_saving_every(&database, "600");
+    wait_for("result", || async {
+        let p = store.progress(&created.id).await.unwrap();
+        (p.done == 1).then_some(())
+    })
+    .await;
+    signal(&second, "KILL");
+    let _ = second.wait();
+    let mut log = String::new();
+    second
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+    assert!(
+        log.contains(&format!(
+            "continuing from the checkpoint job={job} step={}",
+            saved.iteration
+        )),
+        "{log}"
+    );
+    let stored: String = sqlx::query_scalar("SELECT report FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    let whole = uninterrupted(&store).await;
+    assert!(saved.iteration > 0 && (saved.iteration as u64) < whole.iterations);
+    assert!(
+        numbers(&stored) == numbers(&serde_json::to_string(&whole).unwrap()),
+        "the resumed result differs from the uninterrupted run"
+    );
 }

@@ -17,6 +17,9 @@
 //! one the first worker would have written, bit for bit. A job whose
 //! sample another job is running waits, and ends done with that job's
 //! result (on PostgreSQL two claims in the same instant may both run it).
+//! A worker asked to shut down lets a run that can resume go on to its
+//! next resumable point (a minute at most) and saves it there before it
+//! hands the job back.
 //!
 //! A run that ends without a result (not settled, blow-up) is still a
 //! result: its outcome and reason are stored like any other. Only a scene
@@ -72,12 +75,23 @@ pub struct Tally {
     pub failed: u64,
 }
 
+/// How long a run asked to hand its job back may go on to reach a point
+/// where it can save its state (a heap saves once per insertion).
+const HAND_BACK_GRACE: Duration = Duration::from_secs(60);
+
 /// What the run on the blocking thread shares with the worker: a flag
-/// that stops it, the checkpoint to continue from, and the latest
-/// checkpoint it saved (the worker writes it to the store).
+/// that stops it, one that asks it to save and then stop (the worker shuts
+/// down), the checkpoint to continue from, and the latest checkpoint it
+/// saved (the worker writes it to the store).
 struct JobObserver {
     job: String,
     stop: Arc<AtomicBool>,
+    hand_back: Arc<AtomicBool>,
+    /// When the run first saw `hand_back`, and whether it saved since.
+    handing_back: Option<Instant>,
+    saved_to_hand_back: bool,
+    /// Whether the protocol can resume (it asked for a checkpoint).
+    resumable: bool,
     every: Option<Duration>,
     last: Instant,
     resume: Option<Checkpoint>,
@@ -86,19 +100,35 @@ struct JobObserver {
 
 impl Observer for JobObserver {
     fn progress(&mut self, _update: &Progress) -> bool {
-        !self.stop.load(Ordering::Relaxed)
+        if self.stop.load(Ordering::Relaxed) {
+            return false;
+        }
+        if !self.hand_back.load(Ordering::Relaxed) {
+            return true;
+        }
+        // Handing back: a run that saves goes on to its next resumable
+        // point and stops once it has saved there, for a while at most.
+        if !self.resumable || self.every.is_none() || self.saved_to_hand_back {
+            return false;
+        }
+        let since = *self.handing_back.get_or_insert_with(Instant::now);
+        since.elapsed() < HAND_BACK_GRACE
     }
 
     fn checkpoint_due(&mut self) -> bool {
-        self.every.is_some_and(|every| self.last.elapsed() >= every)
+        let handing_back = self.hand_back.load(Ordering::Relaxed);
+        self.every
+            .is_some_and(|every| handing_back || self.last.elapsed() >= every)
     }
 
     fn save(&mut self, checkpoint: Checkpoint) {
         self.last = Instant::now();
         self.saved.send_replace(Some(checkpoint));
+        self.saved_to_hand_back = self.hand_back.load(Ordering::Relaxed);
     }
 
     fn saved(&mut self) -> Option<Checkpoint> {
+        self.resumable = true;
         self.resume.take()
     }
 
@@ -292,10 +322,15 @@ async fn run_leased(
     shutdown: &mut watch::Receiver<bool>,
 ) -> (RunAnswer, bool, Lease) {
     let stop = Arc::new(AtomicBool::new(false));
+    let hand_back = Arc::new(AtomicBool::new(false));
     let (saved, mut checkpoints) = watch::channel(None);
     let mut observer = JobObserver {
         job: job.job_id.clone(),
         stop: stop.clone(),
+        hand_back: hand_back.clone(),
+        handing_back: None,
+        saved_to_hand_back: false,
+        resumable: false,
         every: config.checkpoint_every,
         last: Instant::now(),
         resume: stored_checkpoint(store, job).await,
@@ -330,11 +365,19 @@ async fn run_leased(
             _ = shutdown.changed(), if !stopping => {
                 if *shutdown.borrow() {
                     stopping = true;
-                    stop.store(true, Ordering::Relaxed);
+                    hand_back.store(true, Ordering::Relaxed);
                 }
             }
         }
     };
+    // The state the run saved on its way out (handing back) is not lost.
+    if saving && checkpoints.has_changed().unwrap_or(false) {
+        let latest = checkpoints.borrow_and_update().clone();
+        if let Some(c) = latest {
+            write_checkpoint(store, config, job, &c).await;
+        }
+    }
+    // A run handed back ends cancelled; one that finished meanwhile is kept.
     (outcome, stop.load(Ordering::Relaxed), lease)
 }
 
