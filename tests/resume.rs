@@ -84,6 +84,26 @@ async fn wait_for<T, F: std::future::Future<Output = Option<T>>>(
     }
 }
 
+/// Lets `worker` finish the store's one sample, stops it, and returns
+/// its log.
+async fn finish(store: &Store, sweep: &str, mut worker: Child) -> String {
+    wait_for("result", || async {
+        let p = store.progress(sweep).await.unwrap();
+        (p.done == 1).then_some(())
+    })
+    .await;
+    signal(&worker, "KILL");
+    let _ = worker.wait();
+    let mut log = String::new();
+    worker
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
+    log
+}
+
 async fn resumes_after_a_kill(database: &str) {
     let store = Store::open(database).await.unwrap();
     let (created, _) = create(&store, &spec(), 3).await;
@@ -112,21 +132,7 @@ async fn resumes_after_a_kill(database: &str) {
     let _ = first.wait();
     assert_eq!(store.progress(&created.id).await.unwrap().done, 0);
 
-    let mut second = start_worker(database);
-    wait_for("result", || async {
-        let p = store.progress(&created.id).await.unwrap();
-        (p.done == 1).then_some(())
-    })
-    .await;
-    signal(&second, "KILL");
-    let _ = second.wait();
-    let mut log = String::new();
-    second
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut log)
-        .unwrap();
+    let log = finish(&store, &created.id, start_worker(database)).await;
 
     let stored: String = sqlx::query_scalar("SELECT report FROM results")
         .fetch_one(store.pool())
@@ -140,13 +146,7 @@ async fn resumes_after_a_kill(database: &str) {
         .unwrap()
         .running
         .is_empty());
-    // The same scene, run here without a stop.
-    let scene: String = sqlx::query_scalar("SELECT scene FROM jobs")
-        .fetch_one(store.pool())
-        .await
-        .unwrap();
-    let scene = Scene::from_stored(serde_json::from_str(&scene).unwrap()).unwrap();
-    let whole = repose_physics::run(&scene, &mut Quiet).unwrap();
+    let whole = uninterrupted(&store).await;
     assert!(whole.outcome.is_completed(), "{:?}", whole.outcome);
     let resumed_at = log
         .lines()
@@ -228,21 +228,7 @@ async fn a_heap_handed_back_on_sigterm_is_saved_first_and_resumes_bit_for_bit() 
     let p = store.progress(&created.id).await.unwrap();
     assert_eq!((p.queued, p.running, p.done), (1, 0, 0));
 
-    let mut second = worker_saving_every(&database, "600");
-    wait_for("result", || async {
-        let p = store.progress(&created.id).await.unwrap();
-        (p.done == 1).then_some(())
-    })
-    .await;
-    signal(&second, "KILL");
-    let _ = second.wait();
-    let mut log = String::new();
-    second
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut log)
-        .unwrap();
+    let log = finish(&store, &created.id, worker_saving_every(&database, "600")).await;
     assert!(
         log.contains(&format!(
             "continuing from the checkpoint job={job} step={}",
