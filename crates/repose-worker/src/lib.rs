@@ -341,14 +341,14 @@ async fn run_leased(
     let mut beat = tokio::time::interval(config.heartbeat);
     beat.tick().await;
     let mut lease = Lease::Held;
-    let mut stopping = false;
     let mut saving = true;
     let outcome = loop {
         tokio::select! {
             done = &mut simulation => break done,
             changed = checkpoints.changed(), if saving => match changed {
                 Ok(()) => {
-                    let latest = checkpoints.borrow_and_update().clone();
+                    // `changed` has marked it seen.
+                    let latest = checkpoints.borrow().clone();
                     if let Some(c) = latest {
                         write_checkpoint(store, config, job, &c).await;
                     }
@@ -362,20 +362,25 @@ async fn run_leased(
                     Err(e) => tracing::warn!(job = %job.job_id, "heartbeat failed: {e}"),
                 }
             }
-            _ = shutdown.changed(), if !stopping => {
+            _ = shutdown.changed(), if !hand_back.load(Ordering::Relaxed) => {
                 if *shutdown.borrow() {
-                    stopping = true;
                     hand_back.store(true, Ordering::Relaxed);
                 }
             }
         }
     };
-    // The state the run saved on its way out (handing back) is not lost.
-    if saving && checkpoints.has_changed().unwrap_or(false) {
-        let latest = checkpoints.borrow_and_update().clone();
-        if let Some(c) = latest {
-            write_checkpoint(store, config, job, &c).await;
+    // The state the run saved on its way out (handing back) is not lost,
+    // though the run has ended and closed the channel.
+    let unseen = {
+        let latest = checkpoints.borrow_and_update();
+        if latest.has_changed() {
+            latest.clone()
+        } else {
+            None
         }
+    };
+    if let Some(c) = unseen {
+        write_checkpoint(store, config, job, &c).await;
     }
     // A run handed back ends cancelled; one that finished meanwhile is kept.
     (outcome, stop.load(Ordering::Relaxed), lease)
