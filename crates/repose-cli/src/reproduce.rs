@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use repose_physics::{registry, Preset, ENGINE};
 use repose_store::Store;
 use repose_studies::data::{StudyData, SweepData};
-use repose_studies::paper::Paper;
+use repose_studies::paper::{variant_label, Paper};
 use repose_studies::papers;
 use repose_studies::reproduction::{DoneSweep, Reproduction};
 use repose_worker::shutdown_on_signals;
@@ -207,11 +207,10 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
 async fn queue_all(
     client: &reqwest::Client,
     args: &ReproduceArgs,
-    paper: &Paper,
+    (paper, set): (&Paper, &[(String, Value)]),
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
-    let set = variant(args)?;
-    let set: serde_json::Map<String, Value> = set.into_iter().collect();
+    let set: serde_json::Map<String, Value> = set.iter().cloned().collect();
     let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced, "set": set});
     let mut out = Vec::new();
     for st in (paper.sweeps)() {
@@ -289,7 +288,8 @@ async fn reproduce(
 ) -> anyhow::Result<ExitCode> {
     let client = crate::client::http()?;
     let out = out_of(args, paper);
-    let queued = queue_all(&client, args, paper, server).await?;
+    let set = variant(args)?;
+    let queued = queue_all(&client, args, (paper, &set), server).await?;
     wait(&client, server, &queued, args.quiet).await?;
     let elapsed = clock.elapsed().as_secs_f64();
     let bindings = queued
@@ -343,11 +343,7 @@ async fn reproduce(
             args.preset,
         ),
         metric_labels: metric_labels(paper),
-        variant: repose_studies::paper::Queue {
-            set: variant(args)?,
-            ..Default::default()
-        }
-        .variant(),
+        variant: variant_label(&set),
     };
     report
         .write(&out)

@@ -116,13 +116,11 @@ pub struct Queue {
     pub set: Vec<(String, Value)>,
 }
 
-impl Queue {
-    /// The variant as a list, `material.limit_load = "net", …` (empty for
-    /// the paper's own model).
-    pub fn variant(&self) -> String {
-        let parts: Vec<String> = self.set.iter().map(|(k, v)| format!("{k} = {v}")).collect();
-        parts.join(", ")
-    }
+/// A variant of the model as a list, `material.limit_load = "net", …`
+/// (empty for the paper's own model).
+pub fn variant_label(set: &[(String, Value)]) -> String {
+    let parts: Vec<String> = set.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+    parts.join(", ")
 }
 
 impl StudySweep {
@@ -146,7 +144,7 @@ impl StudySweep {
             }
             doc::set(&mut base, key, value.clone())?;
         }
-        let name = match q.variant() {
+        let name = match variant_label(&q.set) {
             v if v.is_empty() => format!("{paper}: {}", self.title),
             v => format!("{paper}: {} [{v}]", self.title),
         };
