@@ -140,13 +140,12 @@ static METRICS: [Metric; 3] = [
     },
 ];
 
-/// The column's presets. Softening loosens a cohesive column: at the
-/// heap's `standard` stiffness (κ = 10⁶) 400 µm to 100 µm glass beads on
-/// Earth pack 0.03–0.06 looser than at glass's 63 GPa, and the packing
-/// fit's D_φ grows from 146 µm to 323 µm (`docs/model-3d.md`, "Packed
-/// columns at glass stiffness"), while a glass-stiff column costs minutes
-/// of one core. So `standard` packs at the true modulus, as `paper` does;
-/// `quick` keeps the pour's softening and its bias.
+/// The column's presets: the pour's (`pour::preset`). Softening loosens a
+/// cohesive column as it steepens a cohesive heap: at κ = 10⁶ 400 µm to
+/// 100 µm glass beads on Earth pack 0.03–0.06 looser than at glass's
+/// 63 GPa, and the packing fit's D_φ grows from 146 µm to 323 µm
+/// (`docs/model-3d.md`, "Packed columns at glass stiffness"); `standard`
+/// packs at the true modulus and `quick` keeps its softening and its bias.
 ///
 /// The column's height moves φ too: a cohesive bed released from the
 /// paper's 100 d packs denser than one released from 40 d (glass, 200 µm
@@ -155,7 +154,7 @@ static METRICS: [Metric; 3] = [
 /// from 40 d, at under half the particle-steps, and carries that bias too.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     match preset {
-        Preset::Standard | Preset::Paper => pour::preset(Preset::Paper),
+        Preset::Standard | Preset::Paper => pour::preset(preset),
         Preset::Quick => {
             let mut v = pour::preset(Preset::Quick);
             v.push(("packing.height", Value::from(QUICK_HEIGHT)));
@@ -372,11 +371,14 @@ mod tests {
     }
 
     #[test]
-    fn the_standard_column_is_as_stiff_as_glass_where_the_standard_heap_is_softened() {
+    fn standard_columns_and_heaps_are_as_stiff_as_glass_and_quick_ones_softened() {
         let glass = modulus("packing", "paper");
-        assert_eq!(modulus("packing", "standard"), glass);
-        assert!(modulus("heap", "standard") < glass / 10.0);
-        assert!(modulus("packing", "quick") < glass / 10.0);
+        assert_eq!(glass, 6.3e10);
+        for protocol in ["packing", "heap"] {
+            assert_eq!(modulus(protocol, "standard"), glass, "{protocol}");
+            assert_eq!(modulus(protocol, "paper"), glass, "{protocol}");
+            assert!(modulus(protocol, "quick") < glass / 10.0, "{protocol}");
+        }
     }
 
     #[test]
