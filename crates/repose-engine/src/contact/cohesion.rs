@@ -101,11 +101,11 @@ where
     }
 
     #[inline(always)]
-    fn limit_load(&self, touch: &Touch<D>, repulsion: f64) -> f64 {
+    fn limit_load(&self, attraction: f64, repulsion: f64) -> f64 {
         match self.limits {
             Limits::Repulsion => repulsion,
-            Limits::Net => (repulsion - self.attraction(touch)).max(0.0),
-            Limits::NetAbsolute => (repulsion - self.attraction(touch)).abs(),
+            Limits::Net => (repulsion - attraction).max(0.0),
+            Limits::NetAbsolute => (repulsion - attraction).abs(),
         }
     }
 

@@ -187,10 +187,11 @@ where
     fn work(&self, r_eff: f64, depth: f64) -> f64;
 
     /// The normal force that bounds sliding and rolling (the Coulomb and
-    /// the rolling limit) for a contact whose repulsive force is `repulsion`:
-    /// that force itself unless the law says otherwise.
+    /// the rolling limit) for a contact whose repulsive force is `repulsion`
+    /// and whose attraction ([`CohesionLaw::attraction`]) is `attraction`:
+    /// the repulsion itself unless the law says otherwise.
     #[inline(always)]
-    fn limit_load(&self, _touch: &Touch<D>, repulsion: f64) -> f64 {
+    fn limit_load(&self, _attraction: f64, repulsion: f64) -> f64 {
         repulsion
     }
 }
@@ -330,12 +331,18 @@ where
         let vn = v.dot(&n);
         let fn_ = self.normal.force(touch, vn);
         let vt = <Dim<D> as Space<D>>::tangential(&v, &n);
-        let load = self.cohesion.limit_load(touch, fn_);
+        // The attraction, once: the limits may read it, and it pulls.
+        let attraction = if C::ACTIVE {
+            self.cohesion.attraction(touch)
+        } else {
+            0.0
+        };
+        let load = self.cohesion.limit_load(attraction, fn_);
         let ft = self.tangential.force(&mut history.0, vt, touch, load, dt);
         let ft = <Dim<D> as Space<D>>::to_vector(ft, &n);
         let mut response = Response::force(n * fn_ + ft);
         if C::ACTIVE {
-            response.force -= n * self.cohesion.attraction(touch);
+            response.force -= n * attraction;
         }
         if ROTATION {
             // The tangential force acts at the contact point, −lever_i n from
