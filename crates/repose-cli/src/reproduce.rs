@@ -207,7 +207,8 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
 async fn queue_all(
     client: &reqwest::Client,
     args: &ReproduceArgs,
-    (paper, set): (&Paper, &[(String, Value)]),
+    paper: &Paper,
+    set: &[(String, Value)],
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
     let set: serde_json::Map<String, Value> = set.iter().cloned().collect();
@@ -289,7 +290,7 @@ async fn reproduce(
     let client = crate::client::http()?;
     let out = out_of(args, paper);
     let set = variant(args)?;
-    let queued = queue_all(&client, args, (paper, &set), server).await?;
+    let queued = queue_all(&client, args, paper, &set, server).await?;
     wait(&client, server, &queued, args.quiet).await?;
     let elapsed = clock.elapsed().as_secs_f64();
     let bindings = queued

@@ -332,11 +332,7 @@ where
         let fn_ = self.normal.force(touch, vn);
         let vt = <Dim<D> as Space<D>>::tangential(&v, &n);
         // The attraction, once: the limits may read it, and it pulls.
-        let attraction = if C::ACTIVE {
-            self.cohesion.attraction(touch)
-        } else {
-            0.0
-        };
+        let attraction = self.cohesion.attraction(touch);
         let load = self.cohesion.limit_load(attraction, fn_);
         let ft = self.tangential.force(&mut history.0, vt, touch, load, dt);
         let ft = <Dim<D> as Space<D>>::to_vector(ft, &n);

@@ -371,10 +371,13 @@ impl HeapReport {
         s
     }
 
+    /// The summary of the setting named `name`, if it ran.
+    fn setting(&self, name: &str) -> Option<&Summary> {
+        self.rows().find(|(c, _)| c.name == name).map(|(_, m)| m)
+    }
+
     fn theta(&self, name: &str) -> Option<Stats> {
-        self.rows()
-            .find(|(c, _)| c.name == name)
-            .and_then(|(_, m)| m.theta)
+        self.setting(name).and_then(|m| m.theta)
     }
 
     /// `a − b` in θ_r as "+1.23° ± 0.45°", or a dash when either is missing.
@@ -387,11 +390,7 @@ impl HeapReport {
 
     /// `a`'s particle-steps a heap over `b`'s, as "1.00×", or a dash.
     fn steps_ratio(&self, a: &str, b: &str) -> String {
-        let steps = |name: &str| {
-            self.rows()
-                .find(|(c, _)| c.name == name)
-                .map(|(_, m)| m.cost.particle_steps)
-        };
+        let steps = |name: &str| self.setting(name).map(|m| m.cost.particle_steps);
         match (steps(a), steps(b)) {
             (Some(x), Some(y)) if y > 0.0 => format!("{:.2}×", x / y),
             _ => "—".into(),
