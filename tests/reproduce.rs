@@ -289,7 +289,7 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     let db = format!("sqlite://{}", scratch("repro-stopped.db").display());
     let store = repose_store::Store::open(&db).await.unwrap();
     let out = scratch("stopped").with_file_name("reproduction-ep21.md");
-    let command = || {
+    let command = |extra: &[&str]| {
         let mut c = Command::new(BIN);
         c.args([
             "reproduce",
@@ -303,12 +303,13 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
         .args(["--checkpoint-every", "0.2", "--database", &db])
         .arg("--out")
         .arg(&out)
+        .args(extra)
         .env("REPOSE_LOG", "info")
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped());
         c
     };
-    let first = command().spawn().expect("repose reproduce starts");
+    let first = command(&[]).spawn().expect("repose reproduce starts");
     let start = std::time::Instant::now();
     while count(&store, "SELECT COUNT(*) FROM checkpoints").await == 0 {
         assert!(start.elapsed().as_secs() < 120, "no checkpoint");
@@ -329,10 +330,50 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     assert_eq!(count(&store, running).await, 0, "handed back: {said}");
     assert!(count(&store, "SELECT COUNT(*) FROM checkpoints").await > 0);
 
-    let again = command().output().expect("repose reproduce runs again");
+    // Run again ahead of what the first run left queued, cheapest first.
+    let again = command(&["--priority", "1", "--order", "cheapest"])
+        .output()
+        .expect("repose reproduce runs again");
     let said = String::from_utf8_lossy(&again.stderr);
     assert!(again.status.success(), "{said}");
     assert!(said.contains("continuing from the checkpoint"), "{said}");
+    // Its workers started once its sweeps were queued: the first samples
+    // they claimed are its cheapest, none of what the first run left.
+    let claims: Vec<String> = said
+        .lines()
+        .filter(|l| l.contains(" claimed "))
+        .filter_map(|l| {
+            Some(
+                l.split(" job=")
+                    .nth(1)?
+                    .split_whitespace()
+                    .next()?
+                    .to_string(),
+            )
+        })
+        .take(2)
+        .collect();
+    assert_eq!(claims.len(), 2, "{said}");
+    let mut first = Vec::new();
+    for job in &claims {
+        let (seq, priority, spec, sweep): (i64, i64, String, String) = sqlx::query_as(
+            "SELECT j.seq, s.priority, s.spec, s.id FROM jobs j JOIN sweeps s ON s.id = j.sweep_id WHERE j.id = ?",
+        )
+        .bind(job)
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+        assert_eq!(priority, 1, "{said}");
+        assert!(spec.contains(r#""order":"cheapest""#), "{spec}");
+        let lowest: i64 =
+            sqlx::query_scalar("SELECT MIN(seq) FROM jobs WHERE sweep_id = ? AND attempts > 0")
+                .bind(&sweep)
+                .fetch_one(store.pool())
+                .await
+                .unwrap();
+        first.push(seq == lowest);
+    }
+    assert!(first.contains(&true), "{said}");
     let open = "SELECT COUNT(*) FROM jobs WHERE state <> 'done'";
     assert_eq!(count(&store, open).await, 0);
     let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;

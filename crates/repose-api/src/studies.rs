@@ -17,6 +17,7 @@ use repose_studies::data::{StudyData, SweepData};
 use repose_studies::paper::{Paper, PaperSummary, Queue};
 use repose_studies::papers;
 use repose_studies::FigureData;
+use repose_sweeps::Order;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -160,6 +161,12 @@ pub struct QueueRequest {
     #[serde(default)]
     #[schema(value_type = Object)]
     pub set: BTreeMap<String, Value>,
+    /// The claim priority (higher runs first), if not the study sweep's own.
+    pub priority: Option<i64>,
+    /// `listed` (the default: point by point) or `cheapest` (the samples
+    /// the protocol estimates cheapest first).
+    #[serde(default)]
+    pub order: Order,
 }
 
 /// Queue the sweep behind a paper's figures: the same sweep the page's
@@ -191,6 +198,8 @@ pub async fn queue(
         samples: request.samples,
         reduced: request.reduced,
         set: request.set.into_iter().collect(),
+        priority: request.priority,
+        order: request.order,
     };
     let spec = sweep.spec(p.key, &queue).map_err(|e| {
         ApiError::field(

@@ -319,6 +319,54 @@ async fn a_papers_sweep_runs_a_variant_of_the_model_when_asked() {
 }
 
 #[tokio::test]
+async fn a_papers_sweep_queued_cheapest_first_at_a_priority_is_claimed_ahead() {
+    let s = store().await;
+    let queue = |body: Value| {
+        let s = s.clone();
+        async move {
+            let body = body.to_string();
+            let (status, created, text) =
+                call(&s, "POST", "/api/studies/ep21/sweeps/heaps", Some(&body)).await;
+            assert_eq!(status, StatusCode::CREATED, "{text}");
+            created["id"].as_str().unwrap().to_string()
+        }
+    };
+    // Queued first, in listed order: its first job is 100 µm at the Moon's g.
+    let listed = queue(json!({"fidelity": "quick", "reduced": true})).await;
+    let cheapest = queue(json!({"fidelity": "quick", "reduced": true,
+        "priority": 3, "order": "cheapest"}))
+    .await;
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{cheapest}"), None).await;
+    assert_eq!(sweep["spec"]["order"], "cheapest");
+    assert_eq!(sweep["priority"], 3);
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{listed}"), None).await;
+    assert!(sweep["spec"].get("order").is_none(), "{sweep}");
+    // Three claims: the later sweep's three cheapest samples, the largest
+    // grains under Earth's gravity first.
+    let mut claimed = Vec::new();
+    for _ in 0..3 {
+        let c = s
+            .claim("t", std::time::Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.sweep_id, cheapest);
+        let scene: Value = serde_json::from_str(&c.scene).unwrap();
+        let d = scene["grains"]["diameter"].as_f64().unwrap();
+        let g = -scene["gravity"][2].as_f64().unwrap();
+        claimed.push((d, g));
+    }
+    assert_eq!(claimed[0], (1e-3, 9.81));
+    assert_eq!(claimed[1].0, 1e-3);
+    assert!((claimed[1].1 - 9.81 * 0.165).abs() < 1e-9);
+    assert_eq!(claimed[2].0, 2.5e-4);
+    let body = json!({"reduced": true, "order": "fastest"}).to_string();
+    let (got, json, text) = call(&s, "POST", "/api/studies/ep21/sweeps/heaps", Some(&body)).await;
+    assert_eq!(got, StatusCode::UNPROCESSABLE_ENTITY, "{text}");
+    assert_eq!(json["errors"][0]["field"], "order", "{text}");
+}
+
+#[tokio::test]
 async fn the_files_of_docs_are_served_by_name_and_nothing_else_is() {
     let s = store().await;
     let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;

@@ -12,6 +12,7 @@ use repose_studies::data::{StudyData, SweepData};
 use repose_studies::paper::{variant_label, Paper};
 use repose_studies::papers;
 use repose_studies::reproduction::{DoneSweep, Reproduction};
+use repose_sweeps::Order;
 use repose_worker::shutdown_on_signals;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -41,6 +42,15 @@ pub struct ReproduceArgs {
     /// Samples (seeds) per point; by default the paper's count.
     #[arg(long)]
     samples: Option<u32>,
+    /// Claim priority of the queued sweeps (higher runs first; by default
+    /// each study sweep's own), e.g. to run them ahead of sweeps already
+    /// queued in the store.
+    #[arg(long)]
+    priority: Option<i64>,
+    /// `listed` (point by point) or `cheapest` (the samples estimated
+    /// cheapest first, so that an interrupted run has finished the most points).
+    #[arg(long, default_value = "listed")]
+    order: Order,
     /// A variant of the model, `key=value` (repeatable): every scene of
     /// every sweep takes it, e.g. `--set material.limit_load=net`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -97,7 +107,8 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
         let Some(url) = args.server.clone() else {
             return with_own_server(&args, &chosen).await;
         };
-        reproduce_all(&args, &chosen, url.trim_end_matches('/')).await
+        let (queued, _) = tokio::sync::watch::channel(false);
+        reproduce_all(&args, &chosen, url.trim_end_matches('/'), &queued).await
     })
 }
 
@@ -140,13 +151,15 @@ fn rewrite(json: &Path) -> anyhow::Result<ExitCode> {
 }
 
 /// Reproduces each paper in turn; each report states its own time.
+/// `queued` turns true once the first paper's sweeps are queued.
 async fn reproduce_all(
     args: &ReproduceArgs,
     papers: &[&Paper],
     server: &str,
+    queued: &tokio::sync::watch::Sender<bool>,
 ) -> anyhow::Result<ExitCode> {
     for paper in papers {
-        reproduce(args, paper, server, Instant::now()).await?;
+        reproduce(args, paper, server, Instant::now(), queued).await?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -169,7 +182,20 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     let workers = args
         .workers
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let handles = spawn_workers(&store, workers, &args.lease, false, &rx)?;
+    // The workers start once this run's sweeps are queued, so that they
+    // claim its samples by its priority and order, not what an earlier
+    // run left in the queue.
+    args.lease.config(String::new())?;
+    let (queued, mut queued_rx) = tokio::sync::watch::channel(false);
+    let starter = {
+        let (store, lease, rx) = (store.clone(), args.lease.clone(), rx.clone());
+        tokio::spawn(async move {
+            match queued_rx.wait_for(|q| *q).await {
+                Ok(_) => spawn_workers(&store, workers, &lease, false, &rx),
+                Err(_) => Ok(Vec::new()),
+            }
+        })
+    };
     let mut stop_rx = rx.clone();
     let app = repose_api::app(store);
     let task = tokio::spawn(async move {
@@ -188,7 +214,7 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     let mut signalled = shutdown_on_signals();
     let url = format!("http://{addr}");
     let result = tokio::select! {
-        r = reproduce_all(args, papers, &url) => r,
+        r = reproduce_all(args, papers, &url, &queued) => r,
         _ = signalled.wait_for(|s| *s) => Err(anyhow::anyhow!(
             "stopped: the running samples go back to the queue in {}; the same \
              command goes on from their latest checkpoints",
@@ -196,7 +222,8 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
         )),
     };
     let _ = tx.send(true);
-    for h in handles {
+    drop(queued);
+    for h in starter.await??.into_iter() {
         let _ = h.await;
     }
     let _ = task.await;
@@ -212,7 +239,8 @@ async fn queue_all(
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
     let set: serde_json::Map<String, Value> = set.iter().cloned().collect();
-    let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced, "set": set});
+    let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced,
+        "set": set, "priority": args.priority, "order": args.order});
     let mut out = Vec::new();
     for st in (paper.sweeps)() {
         let url = format!("{server}/api/studies/{}/sweeps/{}", paper.key, st.key);
@@ -286,11 +314,13 @@ async fn reproduce(
     paper: &Paper,
     server: &str,
     clock: Instant,
+    started: &tokio::sync::watch::Sender<bool>,
 ) -> anyhow::Result<ExitCode> {
     let client = crate::client::http()?;
     let out = out_of(args, paper);
     let set = variant(args)?;
     let queued = queue_all(&client, args, paper, &set, server).await?;
+    started.send_replace(true);
     wait(&client, server, &queued, args.quiet).await?;
     let elapsed = clock.elapsed().as_secs_f64();
     let bindings = queued

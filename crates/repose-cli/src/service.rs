@@ -142,7 +142,7 @@ impl Default for LeaseArgs {
 }
 
 impl LeaseArgs {
-    fn config(&self, owner: String) -> anyhow::Result<WorkerConfig> {
+    pub(crate) fn config(&self, owner: String) -> anyhow::Result<WorkerConfig> {
         if !(self.lease > 0.0 && self.heartbeat > 0.0 && self.heartbeat < self.lease) {
             bail!("--heartbeat must be positive and shorter than --lease");
         }

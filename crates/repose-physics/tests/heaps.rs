@@ -33,6 +33,14 @@ fn heap(extra: &[&str]) -> RunReport {
     run(&scene, &mut Quiet).unwrap()
 }
 
+/// The ratio of a run's particle-steps to the protocol's estimate of them.
+fn cost_ratio(base: &str, extra: &[&str], report: &RunReport) -> f64 {
+    let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::from_toml(base, &o).unwrap().resolved();
+    let estimate = scene.protocol().unwrap().cost(&scene).unwrap();
+    report.particle_steps as f64 / estimate
+}
+
 /// The outline of a triangle of base `base` and angle `theta` (°) centred on
 /// a plate of side `plate` in columns of width `w` (all in d, with d = 1),
 /// and a chain of single grains (one diameter high) from its right toe to
@@ -151,6 +159,11 @@ fn a_small_cohesionless_heap_stands_at_a_finite_angle_and_repeats_bit_for_bit() 
     assert_eq!(g.inserted, 1500);
     assert_eq!(g.lost + g.remaining, g.inserted);
     assert_eq!(r.profiles.len(), 2);
+    // The estimate a queue ranks samples by is the run's cost within a
+    // factor 3 (it cannot know the grains that fall off the plate).
+    let ratio = cost_ratio(SMALL_HEAP, &["seed=3"], &r);
+    println!("particle-steps / estimate: {ratio:.2}");
+    assert!((0.33..3.0).contains(&ratio), "{ratio}");
     // The same scene and seed, on two threads: the same numbers.
     let again = heap(&["seed=3", "numerics.threads=2"]);
     assert_eq!(again.metrics, r.metrics);
@@ -200,10 +213,12 @@ fn the_outcomes_of_a_heap_that_cannot_be_measured_say_why() {
     }
 }
 
+const SMALL_COLUMN: &str =
+    "protocol = \"packing\"\npreset = \"quick\"\n[packing]\nwidth = 6\nheight = 30\n";
+
 fn packing(extra: &[&str]) -> RunReport {
-    let base = "protocol = \"packing\"\npreset = \"quick\"\n[packing]\nwidth = 6\nheight = 30\n";
     let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
-    run(&Scene::from_toml(base, &o).unwrap(), &mut Quiet).unwrap()
+    run(&Scene::from_toml(SMALL_COLUMN, &o).unwrap(), &mut Quiet).unwrap()
 }
 
 #[test]
@@ -219,6 +234,9 @@ fn spheres_released_in_a_periodic_column_pack_randomly_and_cohesion_loosens_them
     // Between random loose and random close packing of frictional spheres.
     assert!((0.54..0.66).contains(&phi), "{phi}");
     assert_eq!(dry.grains.lost, 0);
+    let ratio = cost_ratio(SMALL_COLUMN, &["material.surface_energy=0"], &dry);
+    println!("particle-steps / estimate: {ratio:.2}");
+    assert!((0.33..3.0).contains(&ratio), "{ratio}");
     let sticky = packing(&["material.youngs_modulus=6.3e6", "grains.diameter=5e-4"]);
     assert!(sticky.outcome.is_completed(), "{:?}", sticky.outcome);
     let loose = sticky.metric("packing_fraction").unwrap();

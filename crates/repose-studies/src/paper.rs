@@ -8,7 +8,7 @@ use crate::figure::{Figure, FigureSummary};
 use crate::quantity::Quantity;
 use repose_physics::doc::{self, DocError};
 use repose_physics::Preset;
-use repose_sweeps::SweepSpec;
+use repose_sweeps::{Order, SweepSpec};
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
@@ -114,6 +114,10 @@ pub struct Queue {
     /// scene of the sweep takes (`material.limit_load = "net"`), over the
     /// paper's base; not an axis of the sweep.
     pub set: Vec<(String, Value)>,
+    /// The claim priority, if not the study sweep's own.
+    pub priority: Option<i64>,
+    /// The order of its jobs in the queue.
+    pub order: Order,
 }
 
 /// A variant of the model as a list, `material.limit_load = "net", …`
@@ -159,7 +163,8 @@ impl StudySweep {
             max_samples: None,
             fidelity: q.fidelity,
             seed_base: 0,
-            priority: self.priority,
+            priority: q.priority.unwrap_or(self.priority),
+            order: q.order,
             study: Some(format!("{paper}/{}", self.key)),
         })
     }

@@ -14,4 +14,4 @@
 pub mod spec;
 pub mod topup;
 
-pub use spec::{JobSpec, SweepSpec};
+pub use spec::{JobSpec, Order, SweepSpec};

@@ -62,6 +62,9 @@ pub struct SweepSpec {
     /// Higher runs first.
     #[serde(default)]
     pub priority: i64,
+    /// The order of the sweep's jobs in the queue.
+    #[serde(default, skip_serializing_if = "Order::is_listed")]
+    pub order: Order,
     /// The study sweep this one queues (`paper/sweep`, e.g. `lh93/fig347`),
     /// if it was queued from a paper's figures.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -70,6 +73,39 @@ pub struct SweepSpec {
 
 fn one() -> u32 {
     1
+}
+
+/// The order in which a sweep's jobs are queued.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Order {
+    /// Point by point, in the order of the axes' values, each point's
+    /// samples together.
+    #[default]
+    Listed,
+    /// The cheapest samples first, by the protocol's estimate of their
+    /// particle-steps (in listed order where it makes none, after those it
+    /// ranks): an interrupted sweep has then finished as many points as
+    /// its time allowed.
+    Cheapest,
+}
+
+impl Order {
+    fn is_listed(&self) -> bool {
+        *self == Order::Listed
+    }
+}
+
+impl std::str::FromStr for Order {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "listed" => Ok(Order::Listed),
+            "cheapest" => Ok(Order::Cheapest),
+            other => Err(format!("`{other}` is no order: `listed` or `cheapest`")),
+        }
+    }
 }
 
 /// One job of an expanded sweep.
@@ -122,6 +158,17 @@ impl SweepSpec {
             for sample in 0..self.samples {
                 jobs.push(job(&point, &doc, self.seed_base, sample)?);
             }
+        }
+        if self.order == Order::Cheapest {
+            let cost = |j: &JobSpec| j.scene.protocol().ok()?.cost(&j.scene);
+            let mut ranked: Vec<(Option<f64>, JobSpec)> =
+                jobs.into_iter().map(|j| (cost(&j), j)).collect();
+            // Stable: equal costs keep their listed order; unranked go last.
+            ranked.sort_by(|(a, _), (b, _)| {
+                let ranked_first = a.is_none().cmp(&b.is_none());
+                ranked_first.then(a.unwrap_or(0.0).total_cmp(&b.unwrap_or(0.0)))
+            });
+            jobs = ranked.into_iter().map(|(_, j)| j).collect();
         }
         Ok(jobs)
     }
@@ -391,6 +438,74 @@ mod tests {
 
     fn spec(v: Value) -> SweepSpec {
         serde_json::from_value(v).unwrap()
+    }
+
+    #[test]
+    fn cheapest_order_queues_large_grains_under_strong_gravity_first() {
+        let sweep = |order: &str| {
+            spec(json!({
+                "protocol": "heap",
+                "base": {"heap": {"plate": 20, "max_grains": 1500}},
+                "axes": {"grains.diameter": [1e-4, 1e-3],
+                         "gravity": [[0.0, 0.0, -1.62], [0.0, 0.0, -9.81]]},
+                "samples": 2, "order": order
+            }))
+        };
+        let listed = sweep("listed").expand().unwrap();
+        let cheapest = sweep("cheapest").expand().unwrap();
+        let cost = |j: &JobSpec| j.scene.protocol().unwrap().cost(&j.scene).unwrap();
+        // The same samples, ranked by the estimate, each point's samples together.
+        let hashes = |jobs: &[JobSpec]| {
+            let mut h: Vec<String> = jobs.iter().map(|j| j.sample_hash.clone()).collect();
+            h.sort();
+            h
+        };
+        assert_eq!(hashes(&listed), hashes(&cheapest));
+        assert!(cheapest.windows(2).all(|w| cost(&w[0]) <= cost(&w[1])));
+        assert_eq!(cheapest[0].point, cheapest[1].point);
+        assert_eq!(cheapest[0].point["grains.diameter"], json!(1e-3));
+        assert_eq!(cheapest[0].point["gravity"], json!([0.0, 0.0, -9.81]));
+        assert_eq!(cheapest[7].point["grains.diameter"], json!(1e-4));
+        assert_eq!(cheapest[7].point["gravity"], json!([0.0, 0.0, -1.62]));
+        // Smaller grains and weaker gravity take more steps a grain.
+        assert!(cost(&cheapest[7]) > 3.0 * cost(&cheapest[0]));
+        // Listed order is the axes' order, and the spec keeps no order field for it.
+        assert_eq!(listed[0].point["grains.diameter"], json!(1e-4));
+        assert!(serde_json::to_value(sweep("listed"))
+            .unwrap()
+            .get("order")
+            .is_none());
+        assert_eq!(
+            serde_json::to_value(sweep("cheapest")).unwrap()["order"],
+            "cheapest"
+        );
+    }
+
+    #[test]
+    fn cheapest_order_keeps_listed_order_where_the_protocol_estimates_nothing() {
+        let s = spec(json!({
+            "protocol": "fill_release",
+            "base": {"box": {"width": 2.0, "height": 2.0}},
+            "axes": {"box.width": [3.0, 2.0]},
+            "samples": 2, "order": "cheapest"
+        }));
+        let jobs = s.expand().unwrap();
+        let widths: Vec<f64> = jobs
+            .iter()
+            .map(|j| {
+                j.scene.sections.value("box").unwrap()["width"]
+                    .as_f64()
+                    .unwrap()
+            })
+            .collect();
+        assert_eq!(widths, [3.0, 3.0, 2.0, 2.0]);
+        let bad =
+            serde_json::from_value::<SweepSpec>(json!({"protocol": "heap", "order": "fastest"}));
+        assert!(bad.unwrap_err().to_string().contains("fastest"));
+        assert!("fastest"
+            .parse::<Order>()
+            .unwrap_err()
+            .contains("`listed` or `cheapest`"));
     }
 
     #[test]

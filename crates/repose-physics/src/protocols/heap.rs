@@ -82,6 +82,19 @@ impl Default for HeapSpec {
     }
 }
 
+impl pour::Budget for HeapSpec {
+    /// The grain cap poured at the spec's rate (the prism filled to its
+    /// fraction each interval), the heap growing evenly, then every grain
+    /// through the least settling time.
+    fn grain_time(&self) -> f64 {
+        let prism = self.inlet_width * self.inlet_width * (self.height - self.inlet_floor).max(1.0);
+        let per_insert = (self.fill_fraction * prism / pour::GRAIN_VOLUME).max(1.0);
+        let grains = self.max_grains as f64;
+        let pour_time = (grains / per_insert).ceil() * self.interval;
+        grains * (0.5 * pour_time + self.settle_min)
+    }
+}
+
 impl Section for HeapSpec {
     const KEY: &'static str = "heap";
     const ABOUT: &'static str =

@@ -88,6 +88,12 @@ pub trait Protocol: Sync {
     fn impact_speed(&self, _scene: &Scene) -> Option<f64> {
         None
     }
+    /// An estimate of a sample's particle-steps, if the protocol makes one:
+    /// good for ranking the samples of a sweep by cost (a queue runs the
+    /// cheap ones first), not for a budget.
+    fn cost(&self, _scene: &Scene) -> Option<f64> {
+        None
+    }
     /// Runs a validated, resolved scene.
     fn run(&self, scene: &Scene, observer: &mut dyn Observer) -> Result<RunReport, SceneError>;
 }

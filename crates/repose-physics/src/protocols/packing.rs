@@ -67,7 +67,15 @@ impl PackingSpec {
     /// The number of grains of diameter `d` the column holds at the fill fraction.
     pub fn grain_count(&self) -> usize {
         let volume = self.width * self.width * self.height;
-        (self.fill_fraction * volume / (std::f64::consts::PI / 6.0)).round() as usize
+        (self.fill_fraction * volume / pour::GRAIN_VOLUME).round() as usize
+    }
+}
+
+impl pour::Budget for PackingSpec {
+    /// Every grain, from the release through the fall of the column's
+    /// height (from rest, √(2 h) in √(d/g)) to the least settling time.
+    fn grain_time(&self) -> f64 {
+        self.grain_count() as f64 * ((2.0 * self.height).sqrt() + self.settle_min)
     }
 }
 

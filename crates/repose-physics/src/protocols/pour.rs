@@ -25,7 +25,7 @@ use std::collections::HashMap;
 /// line, 3D spheres of Elekes & Parteli's model, their own section and the
 /// grains at rest, their metrics, their presets, the pour checks, and the
 /// fastest impact, a grain falling the domain's height (`spec`'s `height`,
-/// in diameters).
+/// in diameters), and the estimate of a sample's cost from its [`Budget`].
 macro_rules! poured_protocol {
     (name: $name:literal, about: $about:literal, spec: $spec:ty, metrics: $metrics:expr, presets: $presets:path) => {
         fn name(&self) -> &'static str {
@@ -68,9 +68,34 @@ macro_rules! poured_protocol {
             let grains: &$crate::models::elekes_parteli::Grains = scene.section().ok()?;
             $crate::protocols::pour::fall_speed(scene, spec.height * grains.diameter)
         }
+
+        fn cost(&self, scene: &$crate::scene::Scene) -> Option<f64> {
+            let spec: &$spec = scene.section().ok()?;
+            $crate::protocols::pour::cost(scene, $crate::protocols::pour::Budget::grain_time(spec))
+        }
     };
 }
 pub(crate) use poured_protocol;
+
+/// What a poured protocol's sample asks of the engine, before it runs.
+pub trait Budget {
+    /// The grains it holds summed over the time it runs, in grains · √(d/g),
+    /// at its grain cap and its least settling time: the run's particle-steps
+    /// are this over the time step in √(d/g).
+    fn grain_time(&self) -> f64;
+}
+
+/// The estimated particle-steps of a poured sample: its [`Budget`] over
+/// the scene's time step, both in √(d/g).
+pub fn cost(scene: &Scene, grain_time: f64) -> Option<f64> {
+    let scales = Scales::of(scene).ok()?;
+    let steps = scales.time / scene.time_step();
+    let cost = grain_time * steps;
+    (cost.is_finite() && cost > 0.0).then_some(cost)
+}
+
+/// Volume of a sphere of diameter 1.
+pub(crate) const GRAIN_VOLUME: f64 = std::f64::consts::PI / 6.0;
 
 /// A poured protocol's run, handed to the engine: its scene, its own
 /// section `spec`, the scales, the grains and the observer.
