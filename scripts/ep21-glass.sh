@@ -14,7 +14,8 @@
 # most points. While the reproduction is unfinished the store is kept in
 # the repository (a copy made by `repose backup` after the run stopped), so
 # that it goes on from its last checkpoints on the next machine. When it
-# finishes it writes docs/reproduction-ep21-glass.md.
+# finishes it writes docs/reproduction-ep21-glass.md; `scripts/ep21-glass.sh
+# --interim` writes it from the samples finished so far, running none.
 #
 # Environment: REPOSE (the program), STORE (the SQLite store); further
 # arguments go to `repose reproduce` (e.g. --workers 1).

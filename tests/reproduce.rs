@@ -330,6 +330,19 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     assert_eq!(count(&store, running).await, 0, "handed back: {said}");
     assert!(count(&store, "SELECT COUNT(*) FROM checkpoints").await > 0);
 
+    // An interim report runs nothing and says what is left.
+    let results = count(&store, "SELECT COUNT(*) FROM results").await;
+    let interim = command(&["--interim"]).output().expect("an interim report");
+    let said = String::from_utf8_lossy(&interim.stderr);
+    assert!(interim.status.success(), "{said}");
+    assert!(!said.contains(" claimed "), "{said}");
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM results").await, results);
+    let report = std::fs::read_to_string(&out).expect("the interim report is written");
+    let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;
+    let line = format!("{results} of its {samples} samples are finished");
+    assert!(report.contains("**Interim report:**"), "{report}");
+    assert!(report.contains(&line), "{line}\n{report}");
+    assert!(report.contains("--interim"), "{report}");
     // Run again ahead of what the first run left queued, cheapest first.
     let again = command(&["--priority", "1", "--order", "cheapest"])
         .output()
@@ -381,4 +394,5 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     assert_eq!(count(&store, "SELECT COUNT(*) FROM checkpoints").await, 0);
     let report = std::fs::read_to_string(&out).expect("the report is written");
     assert!(report.contains("Wall time of this run"), "{report}");
+    assert!(!report.contains("Interim report"), "{report}");
 }

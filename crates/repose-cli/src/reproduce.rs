@@ -69,6 +69,11 @@ pub struct ReproduceArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Write the report from the samples finished so far and stop, without
+    /// running any (its own server starts no worker): an interim report of
+    /// a reproduction that runs in pieces. It says how many samples are left.
+    #[arg(long)]
+    interim: bool,
     /// Write a report again from the numbers it saved (its JSON), with the
     /// current comparison of the paper's results and the preset's bias as
     /// the speed/accuracy study beside it now measures it; nothing is run.
@@ -179,9 +184,11 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
     let addr = listener.local_addr()?;
     let (tx, rx) = tokio::sync::watch::channel(false);
-    let workers = args
-        .workers
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let workers = match args.workers {
+        _ if args.interim => 0,
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
     // The workers start once this run's sweeps are queued, so that they
     // claim its samples by its priority and order, not what an earlier
     // run left in the queue.
@@ -321,17 +328,21 @@ async fn reproduce(
     let set = variant(args)?;
     let queued = queue_all(&client, args, paper, &set, server).await?;
     started.send_replace(true);
-    wait(&client, server, &queued, args.quiet).await?;
+    if !args.interim {
+        wait(&client, server, &queued, args.quiet).await?;
+    }
     let elapsed = clock.elapsed().as_secs_f64();
     let bindings = queued
         .iter()
         .map(|(k, _, q)| format!("{k}:{}", q["id"].as_str().unwrap_or_default()))
         .collect::<Vec<_>>()
         .join(",");
-    let mut sweeps = Vec::new();
+    let (mut sweeps, mut pending) = (Vec::new(), 0);
     for (key, title, q) in &queued {
         let id = q["id"].as_str().unwrap_or_default().to_string();
         let sw = get_json(&client, &format!("{server}/api/sweeps/{id}")).await?;
+        let open = |k: &str| sw["progress"][k].as_u64().unwrap_or(0);
+        pending += open("queued") + open("running");
         let pts = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
         sweeps.push(DoneSweep {
             key: key.clone(),
@@ -375,6 +386,7 @@ async fn reproduce(
         ),
         metric_labels: metric_labels(paper),
         variant: variant_label(&set),
+        pending,
     };
     report
         .write(&out)
@@ -408,6 +420,9 @@ fn command(args: &ReproduceArgs, paper: &Paper) -> String {
     }
     if args.reduced {
         c.push_str(" --reduced");
+    }
+    if args.interim {
+        c.push_str(" --interim");
     }
     c
 }

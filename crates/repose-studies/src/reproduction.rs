@@ -53,6 +53,9 @@ pub struct Reproduction {
     /// the paper's own.
     #[serde(default)]
     pub variant: String,
+    /// Samples not finished when it was written (an interim report).
+    #[serde(default)]
+    pub pending: u64,
 }
 
 /// A static chart of a figure's data.
@@ -184,6 +187,16 @@ impl Reproduction {
                 s,
                 "Every scene ran a variant of the model: {}, over the paper's own settings.\n",
                 self.variant
+            );
+        }
+        if self.pending > 0 {
+            let total: u64 = self.sweeps.iter().map(|d| d.jobs).sum();
+            let _ = writeln!(
+                s,
+                "**Interim report:** {} of its {total} samples are finished and {} are still queued; \
+                 every number below is of the finished samples alone, and a point without one is missing.\n",
+                total.saturating_sub(self.pending),
+                self.pending
             );
         }
         let _ = writeln!(s, "## Cost\n");
