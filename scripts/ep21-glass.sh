@@ -8,10 +8,10 @@
 #   cargo build --release && scripts/ep21-glass.sh
 #
 # SIGTERM or Ctrl-C saves the running samples and hands them back to the
-# store; running the script again goes on from there. The samples run
-# cheapest first (large grains, strong gravity), ahead of any sweep an
-# earlier run left queued, so that a run stopped early has finished the
-# most points. While the reproduction is unfinished the store is kept in
+# store; running the script again goes on from there. The cheap sweeps
+# (dry heaps, packed columns) run first and each sweep's samples cheapest
+# first (large grains, strong gravity), ahead of any sweep an earlier run
+# left queued, so that a run stopped early has finished the most points. While the reproduction is unfinished the store is kept in
 # the repository (a copy made by `repose backup` after the run stopped), so
 # that it goes on from its last checkpoints on the next machine. When it
 # finishes it writes docs/reproduction-ep21-glass.md; `scripts/ep21-glass.sh
@@ -27,4 +27,4 @@ mkdir -p "$(dirname "$STORE")"
 exec "$REPOSE" reproduce --paper ep21 --preset paper \
   --set material.limit_load=net --set material.contact_attraction=fading \
   --database "sqlite://$STORE" --out docs/reproduction-ep21-glass.md \
-  --checkpoint-every 300 --priority 1 --order cheapest -q "$@"
+  --checkpoint-every 300 --raise-priority 1 --order cheapest -q "$@"

@@ -42,11 +42,11 @@ pub struct ReproduceArgs {
     /// Samples (seeds) per point; by default the paper's count.
     #[arg(long)]
     samples: Option<u32>,
-    /// Claim priority of the queued sweeps (higher runs first; by default
-    /// each study sweep's own), e.g. to run them ahead of sweeps already
-    /// queued in the store.
-    #[arg(long)]
-    priority: Option<i64>,
+    /// Raise the claim priority of every sweep by this much over the
+    /// study's own (keeping their order among themselves), e.g. to run
+    /// them ahead of sweeps already queued in the store.
+    #[arg(long, default_value_t = 0)]
+    raise_priority: i64,
     /// `listed` (point by point) or `cheapest` (the samples estimated
     /// cheapest first, so that an interrupted run has finished the most points).
     #[arg(long, default_value = "listed")]
@@ -246,10 +246,10 @@ async fn queue_all(
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
     let set: serde_json::Map<String, Value> = set.iter().cloned().collect();
-    let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced,
-        "set": set, "priority": args.priority, "order": args.order});
     let mut out = Vec::new();
     for st in (paper.sweeps)() {
+        let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced,
+            "set": set, "priority": st.priority + args.raise_priority, "order": args.order});
         let url = format!("{server}/api/studies/{}/sweeps/{}", paper.key, st.key);
         let resp = client
             .post(&url)

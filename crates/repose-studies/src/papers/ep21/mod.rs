@@ -155,7 +155,9 @@ fn sweeps() -> Vec<StudySweep> {
             },
             axes: axes(vec![("gravity", gravities(&GRAVITIES))]),
             samples: 2,
-            priority: 0,
+            // Cheap beside the cohesive heaps: queued ahead of them, so that a
+            // reproduction run in pieces has this figure whole early.
+            priority: 1,
             reduced: Reduced {
                 // Dry spheres roll off a 10 d plate (a dozen of 250 stay):
                 // a dry heap needs the study's 20 d plate to hold a base layer.
@@ -186,7 +188,8 @@ fn sweeps() -> Vec<StudySweep> {
                 ("gravity", gravities(&[0.165, 1.0, 10.0])),
             ]),
             samples: 2,
-            priority: 0,
+            // Cheap beside the cohesive heaps, as the dry ones.
+            priority: 1,
             reduced: Reduced {
                 base: {
                     let mut b = glass(SURFACE_ENERGY);
