@@ -185,7 +185,9 @@ impl Reproduction {
         if !self.variant.is_empty() {
             let _ = writeln!(
                 s,
-                "Every scene ran a variant of the model: {}, over the paper's own settings.\n",
+                "Every scene ran a variant of the model: {}, over the paper's own settings. \
+                 The causes the comparison below quotes were measured on the paper's own model; \
+                 where they name it, they are not this variant's.\n",
                 self.variant
             );
         }
