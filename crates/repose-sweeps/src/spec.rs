@@ -150,7 +150,8 @@ impl SweepSpec {
             .fold(self.samples as usize, |n, v| n.saturating_mul(v.len()))
     }
 
-    /// Validates the spec and builds every job, in (point, sample) order.
+    /// Validates the spec and builds every job, in (point, sample) order or,
+    /// with [`Order::Cheapest`], ranked by the estimated cost.
     pub fn expand(&self) -> Result<Vec<JobSpec>, SceneError> {
         self.check()?;
         let mut jobs = Vec::with_capacity(self.job_count());
