@@ -18,7 +18,8 @@
 # --interim` writes it from the samples finished so far, running none.
 #
 # Environment: REPOSE (the program), STORE (the SQLite store); further
-# arguments go to `repose reproduce` (e.g. --workers 1).
+# arguments go to `repose reproduce` (e.g. --workers 1, or --first
+# 'gravity=[0,0,-9.81]' to finish Earth's points, figure 2's, first).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPOSE=${REPOSE:-$PWD/target/release/repose}

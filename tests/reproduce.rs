@@ -399,3 +399,89 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     assert!(report.contains("Wall time of this run"), "{report}");
     assert!(!report.contains("Interim report"), "{report}");
 }
+
+/// `--first` queues the named points of each sweep that has them as a
+/// slice above every sweep of the run, then the sweeps whole: the report
+/// reads the whole sweeps, which share the slices' samples.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn first_points_are_queued_as_slices_ahead_of_the_whole_study() {
+    let db = format!("sqlite://{}", scratch("repro-first.db").display());
+    let store = repose_store::Store::open(&db).await.unwrap();
+    let out = scratch("first").with_file_name("reproduction-ep21.md");
+    let run = |first: &str| {
+        Command::new(BIN)
+            .args([
+                "reproduce",
+                "--paper",
+                "ep21",
+                "--reduced",
+                "--samples",
+                "1",
+            ])
+            .args(["--preset", "quick", "-q", "--interim", "--database", &db])
+            .args(["--first", first, "--out"])
+            .arg(&out)
+            .output()
+            .expect("repose reproduce runs")
+    };
+    let bad = run("gravity=[0,0,-1]");
+    let said = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success(), "{said}");
+    assert!(said.contains("--first gravity=[0,0,-1]"), "{said}");
+    assert_eq!(
+        count(&store, "SELECT COUNT(*) FROM sweeps").await,
+        0,
+        "{said}"
+    );
+
+    let ok = run("gravity=[0,0,-9.81]");
+    let said = String::from_utf8_lossy(&ok.stderr);
+    assert!(ok.status.success(), "{said}");
+    let sweeps: Vec<(String, i64, Option<String>)> =
+        sqlx::query_as("SELECT id, priority, study FROM sweeps ORDER BY created_at")
+            .fetch_all(store.pool())
+            .await
+            .unwrap();
+    // The reduced heaps (g̃ = 0.165 and 1) and columns (Earth only) have
+    // Earth's points; the reduced dry heaps (g̃ = 0.165 and 10) have none.
+    let slices: Vec<_> = sweeps.iter().filter(|s| s.2.is_none()).collect();
+    assert_eq!(slices.len(), 2, "{sweeps:?}");
+    assert_eq!(sweeps.len(), 5, "{sweeps:?}");
+    // Above every sweep of the study (its highest own priority is 1).
+    assert!(slices.iter().all(|s| s.1 == 2), "{sweeps:?}");
+    assert!(sweeps.iter().filter(|s| s.2.is_some()).all(|s| s.1 < 2));
+    for (id, _, _) in slices {
+        let gravities: Vec<String> = sqlx::query_scalar(
+            "SELECT DISTINCT json_extract(point, '$.gravity') FROM jobs WHERE sweep_id = ?",
+        )
+        .bind(id)
+        .fetch_all(store.pool())
+        .await
+        .unwrap();
+        assert_eq!(gravities, ["[0.0,0.0,-9.81]"], "{id}");
+        let shared: i64 = sqlx::query_scalar(
+            "SELECT COUNT(*) FROM jobs a WHERE a.sweep_id = ? AND EXISTS (SELECT 1 FROM jobs b \
+             JOIN sweeps s ON s.id = b.sweep_id WHERE s.study IS NOT NULL AND b.sample_hash = a.sample_hash)",
+        )
+        .bind(id)
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+        let all: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE sweep_id = ?")
+            .bind(id)
+            .fetch_one(store.pool())
+            .await
+            .unwrap();
+        assert_eq!(
+            (shared, all > 0),
+            (all, true),
+            "every sample of a slice is the whole sweep's"
+        );
+    }
+    let report = std::fs::read_to_string(&out).expect("the interim report is written");
+    let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;
+    assert!(
+        report.contains(&format!("0 of its {samples} samples")),
+        "{report}"
+    );
+}

@@ -167,6 +167,13 @@ pub struct QueueRequest {
     /// the protocol estimates cheapest first).
     #[serde(default)]
     pub order: Order,
+    /// A slice of the sweep to run ahead: for an axis, the values to queue
+    /// (each one of the axis's own), e.g. `{"gravity": [[0, 0, -9.81]]}`.
+    /// A slice is not the study's sweep (the figures read the whole one);
+    /// the whole sweep, queued before or after, shares its samples.
+    #[serde(default)]
+    #[schema(value_type = Object)]
+    pub only: BTreeMap<String, Vec<Value>>,
 }
 
 /// Queue the sweep behind a paper's figures: the same sweep the page's
@@ -200,14 +207,11 @@ pub async fn queue(
         set: request.set.into_iter().collect(),
         priority: request.priority,
         order: request.order,
+        only: request.only,
     };
-    let spec = sweep.spec(p.key, &queue).map_err(|e| {
-        ApiError::field(
-            StatusCode::UNPROCESSABLE_ENTITY,
-            format!("set.{}", e.field),
-            e.message,
-        )
-    })?;
+    let spec = sweep
+        .spec(p.key, &queue)
+        .map_err(|e| ApiError::field(StatusCode::UNPROCESSABLE_ENTITY, e.field, e.message))?;
     // A scene the variant makes invalid names the setting it came from.
     enqueue(&s.store, &spec).await.map_err(|e| {
         e.renamed(|field| {

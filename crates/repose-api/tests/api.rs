@@ -367,6 +367,80 @@ async fn a_papers_sweep_queued_cheapest_first_at_a_priority_is_claimed_ahead() {
 }
 
 #[tokio::test]
+async fn a_slice_of_a_papers_sweep_runs_ahead_and_shares_its_samples_with_the_whole() {
+    let s = store().await;
+    let post = |body: Value| {
+        let s = s.clone();
+        async move {
+            let body = body.to_string();
+            call(&s, "POST", "/api/studies/ep21/sweeps/heaps", Some(&body)).await
+        }
+    };
+    // Earth's points, the gravity written with integers: numbers are
+    // matched by value and queued as the axis spells them.
+    let (status, slice, text) = post(json!({"fidelity": "quick", "reduced": true,
+        "priority": 5, "only": {"gravity": [[0, 0, -9.81]]}}))
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_eq!(slice["jobs"], 3, "three sizes on Earth: {text}");
+    let slice_id = slice["id"].as_str().unwrap().to_string();
+    let (_, sweep, _) = call(&s, "GET", &format!("/api/sweeps/{slice_id}"), None).await;
+    assert_eq!(sweep["spec"]["axes"]["gravity"], json!([[0.0, 0.0, -9.81]]));
+    assert!(
+        sweep["spec"].get("study").is_none(),
+        "a slice is not the study's sweep: {sweep}"
+    );
+    assert!(
+        sweep["name"]
+            .as_str()
+            .unwrap()
+            .ends_with("only gravity = [0.0,0.0,-9.81]"),
+        "{sweep}"
+    );
+    let (status, whole, text) = post(json!({"fidelity": "quick", "reduced": true})).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_eq!(whole["jobs"], 6, "{text}");
+    // The slice is claimed first; then, with its three samples running,
+    // the whole sweep's copies of them are skipped: only its points at the
+    // Moon's gravity are left to claim.
+    for k in 0..6 {
+        let c = s
+            .claim("t", std::time::Duration::from_secs(60))
+            .await
+            .unwrap();
+        let c = c.unwrap_or_else(|| panic!("nothing left to claim after {k} claims"));
+        let scene: Value = serde_json::from_str(&c.scene).unwrap();
+        let g = -scene["gravity"][2].as_f64().unwrap();
+        if k < 3 {
+            assert_eq!((c.sweep_id.as_str(), g), (slice_id.as_str(), 9.81));
+        } else {
+            assert_eq!(c.sweep_id, whole["id"].as_str().unwrap());
+            assert!((g - 9.81 * 0.165).abs() < 1e-9, "claim {k}: g = {g}");
+        }
+    }
+    assert!(s
+        .claim("t", std::time::Duration::from_secs(60))
+        .await
+        .unwrap()
+        .is_none());
+    for (body, field) in [
+        (json!({"reduced": true, "only": {"seed": [1]}}), "only.seed"),
+        (
+            json!({"reduced": true, "only": {"gravity": [[0, 0, -1]]}}),
+            "only.gravity",
+        ),
+        (
+            json!({"reduced": true, "only": {"gravity": []}}),
+            "only.gravity",
+        ),
+    ] {
+        let (got, json, text) = post(body).await;
+        assert_eq!(got, StatusCode::UNPROCESSABLE_ENTITY, "{text}");
+        assert_eq!(json["errors"][0]["field"], field, "{text}");
+    }
+}
+
+#[tokio::test]
 async fn the_files_of_docs_are_served_by_name_and_nothing_else_is() {
     let s = store().await;
     let (status, _, text) = call(&s, "GET", "/docs/speed-vs-accuracy.md", None).await;

@@ -15,6 +15,7 @@ use repose_studies::reproduction::{DoneSweep, Reproduction};
 use repose_sweeps::Order;
 use repose_worker::shutdown_on_signals;
 use serde_json::{json, Value};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -51,6 +52,13 @@ pub struct ReproduceArgs {
     /// cheapest first, so that an interrupted run has finished the most points).
     #[arg(long, default_value = "listed")]
     order: Order,
+    /// Run these points ahead of the rest, `axis=value` (repeatable; JSON
+    /// values, several values of one axis allowed), e.g. `--first
+    /// 'gravity=[0,0,-9.81]'`: each sweep with those axes first queues that
+    /// slice above every sweep of the run, then itself whole (the whole
+    /// sweep takes the slice's samples).
+    #[arg(long = "first", value_name = "AXIS=VALUE")]
+    first: Vec<String>,
     /// A variant of the model, `key=value` (repeatable): every scene of
     /// every sweep takes it, e.g. `--set material.limit_load=net`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -105,6 +113,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<ExitCode> {
             }
         }
     };
+    check_first(&args, &chosen)?;
     if chosen.len() > 1 && args.out.is_some() {
         bail!("--out names one report: with --paper all, give --out-dir");
     }
@@ -246,6 +255,7 @@ async fn queue_all(
     server: &str,
 ) -> anyhow::Result<Vec<(String, String, Value)>> {
     let set: serde_json::Map<String, Value> = set.iter().cloned().collect();
+    queue_first(client, args, paper, &set, server).await?;
     let mut out = Vec::new();
     for st in (paper.sweeps)() {
         let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced,
@@ -271,6 +281,68 @@ async fn queue_all(
         out.push((st.key.to_string(), st.title.to_string(), answer));
     }
     Ok(out)
+}
+
+/// The `--first` assignments, as axis → values.
+fn first(args: &ReproduceArgs) -> anyhow::Result<BTreeMap<String, Vec<Value>>> {
+    let mut wanted: BTreeMap<String, Vec<Value>> = BTreeMap::new();
+    for a in &args.first {
+        let (axis, value) = repose_physics::doc::parse_assignment(a)
+            .map_err(|e| anyhow::anyhow!("--first {}: {}", e.field, e.message))?;
+        wanted.entry(axis).or_default().push(value);
+    }
+    Ok(wanted)
+}
+
+/// Fails where a `--first` value is on no axis of the chosen papers' sweeps.
+fn check_first(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Result<()> {
+    for (axis, values) in &first(args)? {
+        for v in values {
+            let held = papers
+                .iter()
+                .flat_map(|p| (p.sweeps)())
+                .any(|st| st.holds(args.reduced, axis, v));
+            if !held {
+                bail!("--first {axis}={v}: no sweep of the study has this value on such an axis");
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Queues the `--first` slice of each sweep that has one, above every
+/// sweep of the run.
+async fn queue_first(
+    client: &reqwest::Client,
+    args: &ReproduceArgs,
+    paper: &Paper,
+    set: &serde_json::Map<String, Value>,
+    server: &str,
+) -> anyhow::Result<()> {
+    let wanted = first(args)?;
+    if wanted.is_empty() {
+        return Ok(());
+    }
+    let sweeps = (paper.sweeps)();
+    let top = sweeps.iter().map(|st| st.priority).max().unwrap_or(0) + args.raise_priority + 1;
+    for st in &sweeps {
+        let Some(only) = st.slice_of(args.reduced, &wanted) else {
+            continue;
+        };
+        let body = json!({"fidelity": args.preset, "samples": args.samples, "reduced": args.reduced,
+            "set": set, "priority": top, "order": args.order, "only": only});
+        let url = format!("{server}/api/studies/{}/sweeps/{}", paper.key, st.key);
+        let resp = client.post(&url).json(&body).send().await?;
+        if !resp.status().is_success() {
+            let answer: Value = resp.json().await.unwrap_or(Value::Null);
+            bail!(
+                "the server refused the first slice of the {} sweep: {}",
+                st.key,
+                answer["error"].as_str().unwrap_or("")
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Waits until no queued sweep has jobs left, with a progress bar.
