@@ -124,6 +124,53 @@ pub fn weighted_slope(points: &[(f64, Aggregate)]) -> Option<(f64, f64)> {
     (d > 0.0).then(|| ((sw * sxy - sx * sy) / d, (sw / d).sqrt()))
 }
 
+/// Least-squares slope of `y` against `x` for points that scatter alike,
+/// each weighted by its sample count, with its standard error: the larger
+/// of the one from the scatter within the points (pooled over them) and
+/// the one from the scatter of their means about the line (which holds
+/// what the line does not describe). For points of a few samples each,
+/// whose own standard errors are too rough to weight by. At least two
+/// points with samples, and a pooled scatter or a third point.
+pub fn pooled_slope(points: &[(f64, Aggregate)]) -> Option<(f64, f64)> {
+    let pts: Vec<(f64, f64, f64)> = points
+        .iter()
+        .filter_map(|(x, a)| Some((*x, a.mean?, a.n as f64)))
+        .filter(|p| p.2 > 0.0)
+        .collect();
+    let w: f64 = pts.iter().map(|p| p.2).sum();
+    let xm = pts.iter().map(|p| p.2 * p.0).sum::<f64>() / w;
+    let ym = pts.iter().map(|p| p.2 * p.1).sum::<f64>() / w;
+    let sxx: f64 = pts.iter().map(|p| p.2 * (p.0 - xm).powi(2)).sum();
+    if pts.len() < 2 || sxx <= 0.0 {
+        return None;
+    }
+    let slope = pts
+        .iter()
+        .map(|p| p.2 * (p.0 - xm) * (p.1 - ym))
+        .sum::<f64>()
+        / sxx;
+    // Within: Σ (n − 1) sd² over Σ (n − 1).
+    let (ss, dof) = points
+        .iter()
+        .fold((0.0, 0.0), |(ss, dof), (_, a)| match (a.sd, a.n > 1) {
+            (Some(sd), true) => (ss + (a.n - 1) as f64 * sd * sd, dof + (a.n - 1) as f64),
+            _ => (ss, dof),
+        });
+    let within = (dof > 0.0).then(|| (ss / dof / sxx).sqrt());
+    let about = (pts.len() > 2).then(|| {
+        let r2: f64 = pts
+            .iter()
+            .map(|p| p.2 * (p.1 - ym - slope * (p.0 - xm)).powi(2))
+            .sum();
+        (r2 / (pts.len() - 2) as f64 / sxx).sqrt()
+    });
+    let se = match (within, about) {
+        (Some(a), Some(b)) => a.max(b),
+        (a, b) => a.or(b)?,
+    };
+    Some((slope, se))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,6 +182,55 @@ mod tests {
             sd: Some(sem * 20f64.sqrt()),
             sem: Some(sem),
         }
+    }
+
+    fn pts(rows: &[(f64, f64, f64)]) -> Vec<(f64, Aggregate)> {
+        rows.iter()
+            .map(|&(x, mean, sd)| {
+                let a = Aggregate {
+                    n: 2,
+                    mean: Some(mean),
+                    sd: Some(sd),
+                    sem: Some(sd / 2f64.sqrt()),
+                };
+                (x, a)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_pooled_slope_is_the_least_squares_line_with_the_larger_error() {
+        // On a line y = 1 + 2x, the means leave no residual: the error is
+        // the pooled scatter within, sd / sqrt(Σ n (x − x̄)²) = 0.5 / sqrt(2·2) (x̄ = 1).
+        let (b, se) =
+            pooled_slope(&pts(&[(0.0, 1.0, 0.5), (1.0, 3.0, 0.5), (2.0, 5.0, 0.5)])).unwrap();
+        assert!(
+            (b - 2.0).abs() < 1e-12 && (se - 0.25).abs() < 1e-12,
+            "{b} {se}"
+        );
+        // Means off the line, scattered far more than within: y = 1, 4, 5
+        // gives slope 2, intercept 4/3, residuals −1/3, 2/3, −1/3, so
+        // Σ n r² = 4/3 over 1 degree of freedom and Σ n (x − x̄)² = 4:
+        // se = sqrt(1/3), well above the within error 0.1 / 2.
+        let (b, se) =
+            pooled_slope(&pts(&[(0.0, 1.0, 0.1), (1.0, 4.0, 0.1), (2.0, 5.0, 0.1)])).unwrap();
+        assert!((b - 2.0).abs() < 1e-12, "{b}");
+        assert!((se - (1.0f64 / 3.0).sqrt()).abs() < 1e-12, "{se}");
+        // One point whose two samples happen to agree does not pin the line,
+        // as 1/sem² weights let it.
+        // Weighted, the line runs through the two tight points (slope 0.25);
+        // pooled, it is the least-squares line of the four (1.75 / 5).
+        let data = pts(&[
+            (0.0, 10.0, 0.5),
+            (1.0, 10.0, 1e-4),
+            (2.0, 12.0, 0.5),
+            (3.0, 10.5, 1e-4),
+        ]);
+        let (weighted, _) = weighted_slope(&data).unwrap();
+        let (pooled, _) = pooled_slope(&data).unwrap();
+        assert!((weighted - 0.25).abs() < 1e-3, "{weighted}");
+        assert!((pooled - 0.35).abs() < 1e-12, "{pooled}");
+        assert_eq!(pooled_slope(&data[..1]), None);
     }
 
     #[test]
