@@ -11,6 +11,9 @@ use sqlx::any::AnyRow;
 use sqlx::Row;
 use std::time::Duration;
 
+/// The PostgreSQL advisory lock that claims hold until they commit.
+const CLAIM_LOCK: i64 = 0x7265_706f_7365;
+
 impl Store {
     /// Stores a sweep and all its jobs in one transaction. Jobs whose sample
     /// already has a result are created done (reused).
@@ -143,6 +146,14 @@ impl Store {
         };
         sqlx::query(begin).execute(&mut *conn).await?;
         let result = async {
+            if self.backend == Backend::Postgres {
+                // Claims take turns, as SQLite's write lock makes them: a
+                // claim then sees every sample that one just before it
+                // started, so no two workers run copies of one sample.
+                sqlx::query(&format!("SELECT pg_advisory_xact_lock({CLAIM_LOCK})"))
+                    .execute(&mut *conn)
+                    .await?;
+            }
             self.expire_leases(&mut conn, now).await?;
             let row = sqlx::query(&claim_sql)
                 .bind(owner)

@@ -119,6 +119,42 @@ async fn concurrent_workers_complete_every_job_exactly_once() {
     .await;
 }
 
+/// Eight sweeps queue the same six samples; eight workers claim at once,
+/// again and again, completing nothing: each sample is claimed once, by
+/// one worker, however the claims interleave.
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn workers_claiming_at_once_never_run_two_copies_of_a_sample() {
+    each_backend(|store| async move {
+        let (spec, jobs) = sweep(3, &[0.1, 0.2]);
+        for _ in 0..8 {
+            store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        }
+        let start = Arc::new(tokio::sync::Barrier::new(8));
+        let mut workers = Vec::new();
+        for w in 0..8 {
+            let (store, start) = (store.clone(), start.clone());
+            workers.push(tokio::spawn(async move {
+                let owner = format!("worker-{w}");
+                let mut claimed = Vec::new();
+                start.wait().await;
+                while let Some(c) = store.claim(&owner, Duration::from_secs(60)).await.unwrap() {
+                    claimed.push(c.sample_hash);
+                }
+                claimed
+            }));
+        }
+        let mut claimed = Vec::new();
+        for w in workers {
+            claimed.extend(w.await.unwrap());
+        }
+        claimed.sort();
+        let unique: HashSet<_> = claimed.iter().collect();
+        assert_eq!(unique.len(), 6, "{claimed:?}");
+        assert_eq!(claimed.len(), 6, "a sample claimed twice: {claimed:?}");
+    })
+    .await;
+}
+
 #[tokio::test]
 async fn an_expired_lease_goes_back_to_the_queue_and_the_old_owner_cannot_complete() {
     each_backend(|store| async move {

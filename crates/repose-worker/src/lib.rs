@@ -16,7 +16,8 @@
 //! sample stopped) continues from the furthest one, and the result is the
 //! one the first worker would have written, bit for bit. A job whose
 //! sample another job is running waits, and ends done with that job's
-//! result (on PostgreSQL two claims in the same instant may both run it).
+//! result (claims take turns, so two claims in the same instant cannot
+//! both take it).
 //! A worker asked to shut down lets a run that can resume go on to its
 //! next resumable point (a minute at most) and saves it there before it
 //! hands the job back.
