@@ -12,6 +12,22 @@ mod common;
 
 use common::{get, scratch, Server, BIN};
 
+/// `repose reproduce` of the second paper's reduced study at `quick`,
+/// `samples` a point, quietly.
+fn reduced_ep21(samples: &str) -> Command {
+    let mut c = Command::new(BIN);
+    c.args([
+        "reproduce",
+        "--paper",
+        "ep21",
+        "--reduced",
+        "--samples",
+        samples,
+    ])
+    .args(["--preset", "quick", "-q"]);
+    c
+}
+
 fn mean_sd(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
     let mean = v.iter().sum::<f64>() / n;
@@ -195,16 +211,8 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
     let db = format!("sqlite://{}", scratch("repro-ep21.db").display());
     let server = Server::start(&db, 2);
     let out = scratch("report").with_file_name("reproduction-ep21.md");
-    let run = Command::new(BIN)
-        .args([
-            "reproduce",
-            "--paper",
-            "ep21",
-            "--reduced",
-            "--samples",
-            "2",
-        ])
-        .args(["--preset", "quick", "-q", "--server", &server.url])
+    let run = reduced_ep21("2")
+        .args(["--server", &server.url])
         // A variant of the model: the limits on the net normal force.
         .args(["--set", "material.limit_load=net"])
         .arg("--out")
@@ -290,23 +298,15 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     let store = repose_store::Store::open(&db).await.unwrap();
     let out = scratch("stopped").with_file_name("reproduction-ep21.md");
     let command = |extra: &[&str]| {
-        let mut c = Command::new(BIN);
-        c.args([
-            "reproduce",
-            "--paper",
-            "ep21",
-            "--reduced",
-            "--samples",
-            "1",
-        ])
-        .args(["--preset", "quick", "-q", "--workers", "2"])
-        .args(["--checkpoint-every", "0.2", "--database", &db])
-        .arg("--out")
-        .arg(&out)
-        .args(extra)
-        .env("REPOSE_LOG", "info")
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped());
+        let mut c = reduced_ep21("1");
+        c.args(["--workers", "2"])
+            .args(["--checkpoint-every", "0.2", "--database", &db])
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .env("REPOSE_LOG", "info")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped());
         c
     };
     let first = command(&[]).spawn().expect("repose reproduce starts");
@@ -409,16 +409,8 @@ async fn first_points_are_queued_as_slices_ahead_of_the_whole_study() {
     let store = repose_store::Store::open(&db).await.unwrap();
     let out = scratch("first").with_file_name("reproduction-ep21.md");
     let run = |first: &str| {
-        Command::new(BIN)
-            .args([
-                "reproduce",
-                "--paper",
-                "ep21",
-                "--reduced",
-                "--samples",
-                "1",
-            ])
-            .args(["--preset", "quick", "-q", "--interim", "--database", &db])
+        reduced_ep21("1")
+            .args(["--interim", "--database", &db])
             .args(["--first", first, "--out"])
             .arg(&out)
             .output()
