@@ -113,8 +113,18 @@ fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
         );
     }
     // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), the regime
-    // boundary, θ_r,nc (3), packing (3).
-    assert_eq!(rows.len(), 14);
+    // boundary, θ_r,nc (3), packing (3), and the eight pass criteria.
+    assert_eq!(rows.len(), 22);
+    // Data made from the paper's curves passes every criterion but eq. 4's
+    // (a fit of another form to them).
+    let criteria: Vec<_> = rows
+        .iter()
+        .filter(|r| r.quantity.starts_with("criterion:"))
+        .collect();
+    assert_eq!(criteria.len(), 8);
+    for r in criteria.iter().filter(|r| !r.quantity.contains("eq. 4")) {
+        assert_eq!(r.verdict, "agrees", "{r:?}");
+    }
     let judged: Vec<&str> = rows.iter().map(|r| r.verdict.as_str()).collect();
     // Data made with α = ½ and eq. 1's μ_∞: eq. 4's constants and the free
     // exponent of eq. 2 are fits of another form, judged on their own.
@@ -137,6 +147,16 @@ fn constants_far_from_the_papers_are_judged_to_differ() {
     assert_eq!(row("D_E (eq. 1").verdict, "differs");
     let mu = row("μ_∞ (eq. 1").ours.unwrap().mean.unwrap();
     assert!((mu - 0.6).abs() < 0.01, "{mu}");
+    // atan(0.6 (1 + 200/1000)) = 35.8° at 1 mm: 9.9° off eq. 1's 25.9°.
+    let one_mm = row("criterion: θ_r of 1 mm");
+    assert_eq!(one_mm.verdict, "differs", "{one_mm:?}");
+    assert!(
+        one_mm.reason.starts_with("+9.8") || one_mm.reason.starts_with("+9.9"),
+        "{}",
+        one_mm.reason
+    );
+    assert_eq!(row("criterion: μ_∞ (eq. 1").verdict, "differs");
+    assert_eq!(row("criterion: D_E (eq. 1").verdict, "differs");
 }
 
 #[test]

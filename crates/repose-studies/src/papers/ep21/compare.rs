@@ -40,6 +40,7 @@ pub fn compare(data: &StudyData) -> Vec<Comparison> {
     if let Some(packing) = data.get("packing") {
         rows.extend(packing_rows(packing));
     }
+    rows.extend(super::criteria::rows(data));
     rows
 }
 

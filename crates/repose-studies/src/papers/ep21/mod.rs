@@ -29,6 +29,7 @@
 //! `docs/model-3d.md`.
 
 pub mod compare;
+mod criteria;
 pub mod curves;
 pub mod figures;
 pub mod quantities;

@@ -1,0 +1,192 @@
+//! The reproduction's pass criteria: tolerances on the paper's headline
+//! numbers (the 1 mm heap on Earth, the exponent of eq. 2, eq. 4's
+//! constants, the packing fit's), each judged as passed or not beside the
+//! statistical verdicts of the comparison.
+
+use super::curves::{
+    ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ4, MU_INF, MU_INF_BOND, PACKING, PHI_INF,
+};
+use super::figures::{d_by_gravity, d_data, on_earth};
+use super::quantities::QUANTITIES;
+use crate::compare::Comparison;
+use crate::data::{StudyData, SweepData};
+use crate::fit::{fit, Fit, Param};
+use crate::fitted::Along;
+use repose_store::Aggregate;
+
+/// Eq. 1 with the paper's constants at 1 mm: 25.92°.
+fn eq1_at_1mm() -> f64 {
+    (EQ1.f)(1000.0, &[MU_INF, D_EARTH_UM])
+}
+
+/// Every criterion the data can judge; a criterion without data is a
+/// "no result" row.
+pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
+    let mut rows = Vec::new();
+    if let Some(heaps) = data.get("heaps") {
+        rows.push(one_mm_on_earth(heaps));
+        rows.extend(heap_fits(heaps));
+    }
+    if let Some(packing) = data.get("packing") {
+        let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing, &QUANTITIES);
+        let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
+        rows.push(param_criterion(
+            ("criterion: φ_∞ (packing fit)", &format!("{PHI_INF} ± 0.01")),
+            &result,
+            "phi_inf",
+            |p| (p.value - PHI_INF).abs() <= 0.01,
+        ));
+        rows.push(param_criterion(
+            (
+                "criterion: D_φ (packing fit, µm)",
+                &format!("{D_PHI_UM} within a factor 1.5"),
+            ),
+            &result,
+            "D_phi_um",
+            |p| within_factor(p.value, D_PHI_UM, 1.5),
+        ));
+    }
+    rows
+}
+
+/// Fig. 2's eq. 1 on Earth (the paper's constants inside our 95 %
+/// interval or within 25 % of ours), eq. 2's exponent and eq. 4.
+fn heap_fits(heaps: &SweepData) -> Vec<Comparison> {
+    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps), &QUANTITIES);
+    let eq1 = fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string());
+    let near = |paper: f64| {
+        move |p: &Param| (p.lo..=p.hi).contains(&paper) || within(p.value, paper, 0.25)
+    };
+    let eq2 = fit(&EQ2, &d_data(&d_by_gravity(heaps)), &[80.0, 0.5]).map_err(|e| e.to_string());
+    let bond = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
+    let eq4 = fit(&EQ4, &bond, &[0.45, 0.02]).map_err(|e| e.to_string());
+    vec![
+        param_criterion(
+            (
+                "criterion: μ_∞ (eq. 1 on Earth)",
+                &format!("{MU_INF}, in our 95 % interval or within 25 %"),
+            ),
+            &eq1,
+            "mu_inf",
+            near(MU_INF),
+        ),
+        param_criterion(
+            (
+                "criterion: D_E (eq. 1 on Earth, µm)",
+                &format!("{D_EARTH_UM}, in our 95 % interval or within 25 %"),
+            ),
+            &eq1,
+            "D_um",
+            near(D_EARTH_UM),
+        ),
+        param_criterion(
+            (
+                "criterion: α (eq. 2)",
+                &format!("{ALPHA}, within 0.35 – 0.65"),
+            ),
+            &eq2,
+            "alpha",
+            |p| (0.35..=0.65).contains(&p.value),
+        ),
+        param_criterion(
+            ("criterion: β (eq. 4)", &format!("{BETA} within a factor 2")),
+            &eq4,
+            "beta",
+            |p| within_factor(p.value, BETA, 2.0),
+        ),
+        param_criterion(
+            (
+                "criterion: μ_∞ (eq. 4)",
+                &format!("{MU_INF_BOND} within 10 %"),
+            ),
+            &eq4,
+            "mu_inf",
+            |p| within(p.value, MU_INF_BOND, 0.10),
+        ),
+    ]
+}
+
+/// The 1 mm heap on Earth within 1.5° of eq. 1's 25.9°; where it is not,
+/// the same heaps read by their silhouette, as the paper reads its images.
+fn one_mm_on_earth(heaps: &SweepData) -> Comparison {
+    let earth = on_earth(heaps);
+    let at = |metric: &str| {
+        earth
+            .along("ep21.d_um", None, metric, &QUANTITIES)
+            .into_iter()
+            .find(|(d, _)| (d - 1000.0).abs() < 1e-6)
+            .map(|(_, a)| a)
+    };
+    let paper = eq1_at_1mm();
+    let quantity = "criterion: θ_r of 1 mm heaps on Earth (°)";
+    let rule = format!("{paper:.1} (eq. 1) ± 1.5");
+    let Some(ours) = at("theta_r").filter(|a| a.mean.is_some()) else {
+        return Comparison::statement(quantity, rule, None, None, false, "no heap at this point")
+            .with_verdict("no result");
+    };
+    let mean = ours.mean.unwrap_or(f64::NAN);
+    let passes = (mean - paper).abs() <= 1.5;
+    let why = match at("theta_r_silhouette").and_then(|a| a.mean) {
+        Some(s) if !passes => format!(
+            "{:+.2}° from eq. 1; read from the same heaps' silhouette, as the paper reads \
+             its images, {s:.2}° ({:+.2}°)",
+            mean - paper,
+            s - paper
+        ),
+        _ => format!("{:+.2}° from eq. 1", mean - paper),
+    };
+    Comparison::statement(quantity, rule, Some(ours), None, passes, why)
+}
+
+/// A fitted constant judged by `passes`; "no result" where the fit failed.
+fn param_criterion(
+    (quantity, rule): (&str, &str),
+    result: &Result<Fit, String>,
+    name: &str,
+    passes: impl Fn(&Param) -> bool,
+) -> Comparison {
+    let p = match result.as_ref().map(|f| (f.param(name), f.points)) {
+        Ok((Some(p), points)) => (p, points),
+        Ok((None, _)) => return no_result(quantity, rule, "not a constant of the fit"),
+        Err(e) => return no_result(quantity, rule, e),
+    };
+    let (p, points) = p;
+    let ours = Aggregate {
+        n: i64::try_from(points).unwrap_or(i64::MAX),
+        mean: Some(p.value),
+        sd: None,
+        sem: Some(p.se),
+    };
+    let why = format!(
+        "ours {:.4} ± {:.4}, 95 % interval [{:.4}, {:.4}]",
+        p.value, p.se, p.lo, p.hi
+    );
+    Comparison::statement(quantity, rule, Some(ours), None, passes(p), why)
+}
+
+fn no_result(quantity: &str, rule: &str, why: &str) -> Comparison {
+    Comparison::statement(quantity, rule, None, None, false, why).with_verdict("no result")
+}
+
+/// Whether `value` is within the fraction `tolerance` of `paper`.
+fn within(value: f64, paper: f64, tolerance: f64) -> bool {
+    (value - paper).abs() <= tolerance * paper.abs()
+}
+
+/// Whether `value` is within a factor `factor` of `paper` (both positive).
+fn within_factor(value: f64, paper: f64, factor: f64) -> bool {
+    value > 0.0 && (paper / factor..=paper * factor).contains(&value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tolerances_are_read_as_the_criteria_state_them() {
+        assert!((eq1_at_1mm() - 25.92).abs() < 0.01, "{}", eq1_at_1mm());
+        assert!(within(0.50, 0.458, 0.10) && !within(0.51, 0.458, 0.10));
+        assert!(within_factor(0.028, 0.014, 2.0) && within_factor(0.007, 0.014, 2.0));
+        assert!(!within_factor(0.0290, 0.014, 2.0) && !within_factor(-0.02, 0.014, 2.0));
+    }
+}
