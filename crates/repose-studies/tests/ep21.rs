@@ -113,15 +113,15 @@ fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
         );
     }
     // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), the regime
-    // boundary, θ_r,nc (3), packing (3), and the eight pass criteria.
-    assert_eq!(rows.len(), 22);
+    // boundary, θ_r,nc (3), packing (3), and the nine pass criteria.
+    assert_eq!(rows.len(), 23);
     // Data made from the paper's curves passes every criterion but eq. 4's
     // (a fit of another form to them).
     let criteria: Vec<_> = rows
         .iter()
         .filter(|r| r.quantity.starts_with("criterion:"))
         .collect();
-    assert_eq!(criteria.len(), 8);
+    assert_eq!(criteria.len(), 9);
     for r in criteria.iter().filter(|r| !r.quantity.contains("eq. 4")) {
         assert_eq!(r.verdict, "agrees", "{r:?}");
     }
@@ -346,5 +346,47 @@ fn a_rise_of_the_dry_angle_is_not_pinned_by_two_lucky_levels() {
             .contains("silhouette, as the paper reads its images, is 25.73°"),
         "{}",
         level.reason
+    );
+}
+
+/// A tower (no heap: every sample failed) at 60 µm on Mars, where the
+/// paper's boundary d_c/2 is 41 µm, fails the criterion and is named;
+/// below d_c/2 (40 µm on the Moon: 62 µm) a tower is what the paper sees.
+#[test]
+fn a_tower_above_half_the_papers_boundary_fails_the_heap_criterion() {
+    let mut heaps = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
+    let tower = |p: &mut Point| {
+        p.metrics.clear();
+        p.failures = p.samples;
+    };
+    let at = |p: &Point, d: f64, g: f64| {
+        p.point["grains.diameter"].as_f64() == Some(d * 1e-6) && p.point["gravity"] == gravity(g)
+    };
+    heaps
+        .points
+        .iter_mut()
+        .filter(|p| at(p, 40.0, 0.165))
+        .for_each(tower);
+    let data = study(heaps.clone());
+    let rows = (ep21::PAPER.compare)(&data);
+    let row = |rows: &[repose_studies::compare::Comparison], q: &str| {
+        rows.iter()
+            .find(|r| r.quantity.starts_with(q))
+            .unwrap()
+            .clone()
+    };
+    assert_eq!(row(&rows, "criterion: a heap at every").verdict, "agrees");
+    heaps
+        .points
+        .iter_mut()
+        .filter(|p| at(p, 60.0, 0.378))
+        .for_each(tower);
+    let rows = (ep21::PAPER.compare)(&study(heaps));
+    let c = row(&rows, "criterion: a heap at every");
+    assert_eq!(c.verdict, "differs");
+    assert!(
+        c.reason.contains("60 µm at g̃ 0.378 (d_c/2 = 41 µm)"),
+        "{}",
+        c.reason
     );
 }

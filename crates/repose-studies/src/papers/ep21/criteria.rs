@@ -7,7 +7,7 @@ use super::curves::{
     ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ4, MU_INF, MU_INF_BOND, PACKING, PHI_INF,
 };
 use super::figures::{d_by_gravity, d_data, on_earth};
-use super::quantities::QUANTITIES;
+use super::quantities::{d_um, g_tilde, QUANTITIES};
 use crate::compare::Comparison;
 use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Fit, Param};
@@ -24,6 +24,7 @@ fn eq1_at_1mm() -> f64 {
 pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
     if let Some(heaps) = data.get("heaps") {
+        rows.push(heaps_down_to_half_dc(heaps));
         rows.push(one_mm_on_earth(heaps));
         rows.extend(heap_fits(heaps));
     }
@@ -104,6 +105,41 @@ fn heap_fits(heaps: &SweepData) -> Vec<Comparison> {
             |p| within(p.value, MU_INF_BOND, 0.10),
         ),
     ]
+}
+
+/// A heap at every point with d ≥ d_c/2 (d_c = 50 µm/√g̃, the paper's
+/// boundary of regime I), judged on the points that have finished.
+fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
+    let (mut tested, mut none) = (0, Vec::new());
+    for p in &heaps.points {
+        let (Some(g), Some(d)) = (g_tilde(&p.point), d_um(&p.point)) else {
+            continue;
+        };
+        let formed = p.metrics.get("theta_r").is_some_and(|a| a.n > 0);
+        if d >= 25.0 / g.sqrt() && (formed || p.failures > 0) {
+            tested += 1;
+            if !formed {
+                none.push(format!(
+                    "{d} µm at g̃ {g} (d_c/2 = {:.0} µm)",
+                    25.0 / g.sqrt()
+                ));
+            }
+        }
+    }
+    let quantity = "criterion: a heap at every point with d ≥ d_c/2";
+    let rule = "d_c = 50 µm/√g̃";
+    if tested == 0 {
+        return no_result(quantity, rule, "no finished point with d ≥ d_c/2");
+    }
+    let why = if none.is_empty() {
+        format!("heaps at all {tested} such points")
+    } else {
+        format!(
+            "no heap (the crest reached the top) at {}, of {tested} such points",
+            none.join(", ")
+        )
+    };
+    Comparison::statement(quantity, rule, None, None, none.is_empty(), why)
 }
 
 /// The 1 mm heap on Earth within 1.5° of eq. 1's 25.9°; where it is not,
