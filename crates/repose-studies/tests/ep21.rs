@@ -29,6 +29,24 @@ fn point(axes: Value, metric: &str, mean: f64, sem: f64) -> Point {
     }
 }
 
+/// The point with one more metric, of the same statistics' form.
+fn with(mut p: Point, metric: &str, mean: f64) -> Point {
+    let mut q = point(json!({}), metric, mean, 0.02);
+    p.metrics.append(&mut q.metrics);
+    p
+}
+
+/// An outline's rms from its triangle: 0.3 d for a regular heap, 1 d for
+/// one of regime I (above the paper's Bo ≈ 10⁴).
+fn roughness(d_um: f64, g: f64) -> f64 {
+    let bond = 12.0 * 0.05 / ((d_um * 1e-6).powi(2) * g * ep21::G_EARTH * 2500.0);
+    if bond > 1e4 {
+        1.0
+    } else {
+        0.3
+    }
+}
+
 fn sweep(points: Vec<Point>) -> SweepData {
     SweepData {
         id: "synthetic".into(),
@@ -56,7 +74,8 @@ fn heaps(mu: f64, d_earth: f64, alpha: f64) -> SweepData {
             let big_d = d_earth * g.powf(-alpha);
             let theta = (curves::EQ1.f)(*d, &[mu, big_d]) + wobble(k + j, 0.15);
             let axes = json!({"grains.diameter": d * 1e-6, "gravity": gravity(*g)});
-            points.push(point(axes, "theta_r", theta, 0.3));
+            let p = point(axes, "theta_r", theta, 0.3);
+            points.push(with(p, "surface_roughness", roughness(*d, *g)));
         }
     }
     sweep(points)
@@ -70,12 +89,13 @@ fn dry(level: f64, rise: f64) -> SweepData {
         .enumerate()
         .map(|(k, g)| {
             let theta = level * (1.0 + rise * ((g.log10() - lo) / span - 0.5));
-            point(
+            let p = point(
                 json!({"gravity": gravity(*g)}),
                 "theta_r",
                 theta + wobble(k, 0.05),
                 0.2,
-            )
+            );
+            with(p, "surface_roughness", 0.3)
         })
         .collect();
     sweep(points)
@@ -113,15 +133,15 @@ fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
         );
     }
     // eq. 1 (2), eq. 2 free (2) and held (1), eq. 4 (2), the regime
-    // boundary, θ_r,nc (3), packing (3), and the nine pass criteria.
-    assert_eq!(rows.len(), 23);
+    // boundary, θ_r,nc (3), packing (3), and the ten pass criteria.
+    assert_eq!(rows.len(), 24);
     // Data made from the paper's curves passes every criterion but eq. 4's
     // (a fit of another form to them).
     let criteria: Vec<_> = rows
         .iter()
         .filter(|r| r.quantity.starts_with("criterion:"))
         .collect();
-    assert_eq!(criteria.len(), 9);
+    assert_eq!(criteria.len(), 10);
     for r in criteria.iter().filter(|r| !r.quantity.contains("eq. 4")) {
         assert_eq!(r.verdict, "agrees", "{r:?}");
     }
@@ -389,4 +409,33 @@ fn a_tower_above_half_the_papers_boundary_fails_the_heap_criterion() {
         "{}",
         c.reason
     );
+}
+
+/// Heaps that turn irregular from Bo ≈ 10³ put the boundary a decade
+/// below the paper's: the criterion fails and says where it lies.
+#[test]
+fn heaps_irregular_a_decade_early_fail_the_regime_criterion() {
+    let mut heaps = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
+    let rows = (ep21::PAPER.compare)(&study(heaps.clone()));
+    let row = |rows: &[repose_studies::compare::Comparison]| {
+        rows.iter()
+            .find(|r| r.quantity.starts_with("criterion: regime I/II"))
+            .unwrap()
+            .clone()
+    };
+    let paper_like = row(&rows);
+    assert_eq!(paper_like.verdict, "agrees", "{paper_like:?}");
+    let b = paper_like.ours.unwrap().mean.unwrap();
+    assert!((5e3..2e4).contains(&b), "{b}");
+    for p in &mut heaps.points {
+        let bond = ep21::quantities::bond(&p.point).unwrap();
+        if bond > 1e3 {
+            p.metrics.get_mut("surface_roughness").unwrap().mean = Some(1.0);
+        }
+    }
+    let early = row(&(ep21::PAPER.compare)(&study(heaps)));
+    assert_eq!(early.verdict, "differs", "{early:?}");
+    let b = early.ours.unwrap().mean.unwrap();
+    assert!((5e2..2e3).contains(&b), "{b}");
+    assert!(early.reason.contains("above 0.60 d"), "{}", early.reason);
 }

@@ -7,7 +7,7 @@ use super::curves::{
     ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ4, MU_INF, MU_INF_BOND, PACKING, PHI_INF,
 };
 use super::figures::{d_by_gravity, d_data, on_earth};
-use super::quantities::{d_um, g_tilde, QUANTITIES};
+use super::quantities::{bond, d_um, g_tilde, BOND_REGIME_I, QUANTITIES};
 use crate::compare::Comparison;
 use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Fit, Param};
@@ -25,6 +25,7 @@ pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
     if let Some(heaps) = data.get("heaps") {
         rows.push(heaps_down_to_half_dc(heaps));
+        rows.push(regime_boundary(heaps, data.get("dry")));
         rows.push(one_mm_on_earth(heaps));
         rows.extend(heap_fits(heaps));
     }
@@ -140,6 +141,76 @@ fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
         )
     };
     Comparison::statement(quantity, rule, None, None, none.is_empty(), why)
+}
+
+/// Where our heaps turn irregular, in Bond number, within a factor 3 of
+/// the paper's Bo ≈ 10⁴. A point is irregular where no heap formed or
+/// its outline strays from its triangle (rms, in d) by more than twice as
+/// much as the heaps without cohesion do on average; the boundary is the
+/// geometric mean of the smallest irregular Bo and the largest regular
+/// one below it.
+fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
+    let quantity = "criterion: regime I/II boundary (Bo)";
+    let rule = "10⁴ within a factor 3";
+    let regular: Vec<f64> = dry
+        .map(|d| d.along("ep21.g_tilde", None, "surface_roughness", &QUANTITIES))
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|(_, a)| a.mean)
+        .collect();
+    if regular.is_empty() {
+        return no_result(
+            quantity,
+            rule,
+            "no heap without cohesion to measure regularity by",
+        );
+    }
+    let limit = 2.0 * regular.iter().sum::<f64>() / regular.len() as f64;
+    let mut points: Vec<(f64, bool)> = heaps
+        .points
+        .iter()
+        .filter_map(|p| {
+            let rough = p.metrics.get("surface_roughness").and_then(|a| a.mean);
+            let finished = rough.is_some() || p.failures > 0;
+            finished.then(|| Some((bond(&p.point)?, rough.is_none_or(|r| r > limit))))?
+        })
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first = points.iter().find(|p| p.1).map(|p| p.0);
+    let below = points
+        .iter()
+        .rev()
+        .find(|p| !p.1 && first.is_none_or(|f| p.0 < f))
+        .map(|p| p.0);
+    let criterion = format!("irregular: no heap, or an outline rms above {limit:.2} d");
+    let (boundary, why) = match (below, first) {
+        (Some(lo), Some(hi)) => (
+            (lo * hi).sqrt(),
+            format!("regular up to Bo = {lo:.3e}, irregular from {hi:.3e} ({criterion})"),
+        ),
+        (None, Some(hi)) => (
+            hi,
+            format!("irregular already at the smallest Bo, {hi:.3e} ({criterion})"),
+        ),
+        (Some(lo), None) if lo > 3.0 * BOND_REGIME_I => {
+            (lo, format!("regular up to Bo = {lo:.3e} ({criterion})"))
+        }
+        _ => {
+            return no_result(
+                quantity,
+                rule,
+                "no irregular point yet, nor a regular one above 3·10⁴",
+            )
+        }
+    };
+    let ours = Aggregate {
+        n: points.len() as i64,
+        mean: Some(boundary),
+        sd: None,
+        sem: None,
+    };
+    let passes = (BOND_REGIME_I / 3.0..=3.0 * BOND_REGIME_I).contains(&boundary);
+    Comparison::statement(quantity, rule, Some(ours), None, passes, why)
 }
 
 /// The 1 mm heap on Earth within 1.5° of eq. 1's 25.9°; where it is not,
