@@ -95,7 +95,8 @@ fn dry(level: f64, rise: f64) -> SweepData {
                 theta + wobble(k, 0.05),
                 0.2,
             );
-            with(p, "surface_roughness", 0.3)
+            let p = with(p, "surface_roughness", 0.3);
+            with(p, "theta_r_silhouette", theta - 0.7)
         })
         .collect();
     sweep(points)
@@ -176,6 +177,14 @@ fn constants_far_from_the_papers_are_judged_to_differ() {
         one_mm.reason
     );
     assert_eq!(row("criterion: μ_∞ (eq. 1").verdict, "differs");
+    // Its first cause is the run's own dry level, about 24° (tan 0.44).
+    let why = &row("μ_∞ (eq. 1").reason;
+    assert!(
+        why.starts_with(
+            "μ_∞ is the angle of heaps without cohesion, and this run's stand at tan θ_r,nc = 0.44"
+        ),
+        "{why}"
+    );
     assert_eq!(row("criterion: D_E (eq. 1").verdict, "differs");
 }
 

@@ -36,6 +36,7 @@ pub fn compare(data: &StudyData) -> Vec<Comparison> {
     }
     if let Some(dry) = data.get("dry") {
         rows.extend(dry_rows(dry));
+        asymptote_cause(&mut rows, dry);
     }
     if let Some(packing) = data.get("packing") {
         rows.extend(packing_rows(packing));
@@ -250,6 +251,33 @@ fn rise_sign_row(rise: Option<Aggregate>) -> Comparison {
         return c.with_verdict("no result");
     }
     c
+}
+
+/// μ_∞ of eqs. 1 and 4 is the angle of heaps without cohesion (tan θ_r,nc):
+/// where it differs, its first measured cause is the same run's dry heaps.
+fn asymptote_cause(rows: &mut [Comparison], dry: &SweepData) {
+    let level = |metric: &str| {
+        let v: Vec<f64> = dry
+            .along("ep21.g_tilde", None, metric, &QUANTITIES)
+            .iter()
+            .filter_map(|(_, a)| a.mean)
+            .collect();
+        (!v.is_empty()).then(|| (v.iter().sum::<f64>() / v.len() as f64).to_radians().tan())
+    };
+    let (Some(columns), Some(outline)) = (level("theta_r"), level("theta_r_silhouette")) else {
+        return;
+    };
+    for r in rows
+        .iter_mut()
+        .filter(|r| r.quantity.starts_with("μ_∞") && r.verdict == "differs")
+    {
+        r.reason = format!(
+            "μ_∞ is the angle of heaps without cohesion, and this run's stand at tan θ_r,nc = \
+             {columns:.3} ({outline:.3} read by their silhouette) against the paper's 0.447 \
+             (θ_r,nc below); {}",
+            r.reason
+        );
+    }
 }
 
 /// What moves the dry level, measured on the same heaps: the angle read
