@@ -298,10 +298,11 @@ fn first(args: &ReproduceArgs) -> anyhow::Result<BTreeMap<String, Vec<Value>>> {
 fn check_first(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Result<()> {
     for (axis, values) in &first(args)? {
         for v in values {
+            let one = BTreeMap::from([(axis.clone(), vec![v.clone()])]);
             let held = papers
                 .iter()
                 .flat_map(|p| (p.sweeps)())
-                .any(|st| st.holds(args.reduced, axis, v));
+                .any(|st| st.slice_of(args.reduced, &one).is_some());
             if !held {
                 bail!("--first {axis}={v}: no sweep of the study has this value on such an axis");
             }

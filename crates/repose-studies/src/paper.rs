@@ -217,17 +217,6 @@ impl StudySweep {
         (!slice.is_empty()).then_some(slice)
     }
 
-    /// Whether `value` is one of the values of this sweep's axis `axis`.
-    pub fn holds(&self, reduced: bool, axis: &str, value: &Value) -> bool {
-        let axes = if reduced {
-            &self.reduced.axes
-        } else {
-            &self.axes
-        };
-        axes.get(axis)
-            .is_some_and(|vs| vs.iter().any(|v| same(v, value)))
-    }
-
     /// Cuts `axes` down to the values `only` names, keeping the axis's own
     /// spelling of each value (so that the scenes, and their samples, are
     /// the whole sweep's).

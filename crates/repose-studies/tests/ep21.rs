@@ -4,6 +4,7 @@
 //! made from other constants is judged to differ.
 
 use repose_store::{Aggregate, Point};
+use repose_studies::compare::Comparison;
 use repose_studies::data::{StudyData, SweepData};
 use repose_studies::figure::Kind;
 use repose_studies::papers::ep21::{self, curves, GRAVITIES};
@@ -45,6 +46,12 @@ fn roughness(d_um: f64, g: f64) -> f64 {
     } else {
         0.3
     }
+}
+
+/// The comparison's row whose quantity starts with `q`.
+fn row(rows: &[Comparison], q: &str) -> Comparison {
+    let found = rows.iter().find(|r| r.quantity.starts_with(q));
+    found.unwrap_or_else(|| panic!("no row {q}")).clone()
 }
 
 fn sweep(points: Vec<Point>) -> SweepData {
@@ -163,29 +170,28 @@ fn the_papers_own_curves_agree_with_every_constant_it_quotes() {
 fn constants_far_from_the_papers_are_judged_to_differ() {
     let data = study(heaps(0.6, 200.0, 0.5));
     let rows = (ep21::PAPER.compare)(&data);
-    let row = |q: &str| rows.iter().find(|r| r.quantity.starts_with(q)).unwrap();
-    assert_eq!(row("μ_∞ (eq. 1").verdict, "differs");
-    assert_eq!(row("D_E (eq. 1").verdict, "differs");
-    let mu = row("μ_∞ (eq. 1").ours.unwrap().mean.unwrap();
+    assert_eq!(row(&rows, "μ_∞ (eq. 1").verdict, "differs");
+    assert_eq!(row(&rows, "D_E (eq. 1").verdict, "differs");
+    let mu = row(&rows, "μ_∞ (eq. 1").ours.unwrap().mean.unwrap();
     assert!((mu - 0.6).abs() < 0.01, "{mu}");
     // atan(0.6 (1 + 200/1000)) = 35.8° at 1 mm: 9.9° off eq. 1's 25.9°.
-    let one_mm = row("criterion: θ_r of 1 mm");
+    let one_mm = row(&rows, "criterion: θ_r of 1 mm");
     assert_eq!(one_mm.verdict, "differs", "{one_mm:?}");
     assert!(
         one_mm.reason.starts_with("+9.8") || one_mm.reason.starts_with("+9.9"),
         "{}",
         one_mm.reason
     );
-    assert_eq!(row("criterion: μ_∞ (eq. 1").verdict, "differs");
+    assert_eq!(row(&rows, "criterion: μ_∞ (eq. 1").verdict, "differs");
     // Its first cause is the run's own dry level, about 24° (tan 0.44).
-    let why = &row("μ_∞ (eq. 1").reason;
+    let why = &row(&rows, "μ_∞ (eq. 1").reason;
     assert!(
         why.starts_with(
             "μ_∞ is the angle of heaps without cohesion, and this run's stand at tan θ_r,nc = 0.44"
         ),
         "{why}"
     );
-    assert_eq!(row("criterion: D_E (eq. 1").verdict, "differs");
+    assert_eq!(row(&rows, "criterion: D_E (eq. 1").verdict, "differs");
 }
 
 #[test]
@@ -361,12 +367,11 @@ fn a_rise_of_the_dry_angle_is_not_pinned_by_two_lucky_levels() {
     let mut data = study(heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5));
     data.sweeps.insert("dry".into(), sweep(points));
     let rows = (ep21::PAPER.compare)(&data);
-    let row = |q: &str| rows.iter().find(|r| r.quantity.starts_with(q)).unwrap();
-    let rise = row("rise of θ_r,nc").ours.unwrap();
+    let rise = row(&rows, "rise of θ_r,nc").ours.unwrap();
     let (mean, sem) = (rise.mean.unwrap(), rise.sem.unwrap());
     assert!(mean.abs() < 1.0 && (0.5..3.0).contains(&sem), "{rise:?}");
-    assert_eq!(row("θ_r,nc rises").verdict, "differs");
-    let level = row("θ_r,nc, mean");
+    assert_eq!(row(&rows, "θ_r,nc rises").verdict, "differs");
+    let level = row(&rows, "θ_r,nc, mean");
     assert_eq!(level.verdict, "differs");
     // The cause is measured on the same heaps: their silhouette's angle.
     assert!(
@@ -398,12 +403,6 @@ fn a_tower_above_half_the_papers_boundary_fails_the_heap_criterion() {
         .for_each(tower);
     let data = study(heaps.clone());
     let rows = (ep21::PAPER.compare)(&data);
-    let row = |rows: &[repose_studies::compare::Comparison], q: &str| {
-        rows.iter()
-            .find(|r| r.quantity.starts_with(q))
-            .unwrap()
-            .clone()
-    };
     assert_eq!(row(&rows, "criterion: a heap at every").verdict, "agrees");
     heaps
         .points
@@ -426,13 +425,8 @@ fn a_tower_above_half_the_papers_boundary_fails_the_heap_criterion() {
 fn heaps_irregular_a_decade_early_fail_the_regime_criterion() {
     let mut heaps = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
     let rows = (ep21::PAPER.compare)(&study(heaps.clone()));
-    let row = |rows: &[repose_studies::compare::Comparison]| {
-        rows.iter()
-            .find(|r| r.quantity.starts_with("criterion: regime I/II"))
-            .unwrap()
-            .clone()
-    };
-    let paper_like = row(&rows);
+    let regime = "criterion: regime I/II";
+    let paper_like = row(&rows, regime);
     assert_eq!(paper_like.verdict, "agrees", "{paper_like:?}");
     let b = paper_like.ours.unwrap().mean.unwrap();
     assert!((5e3..2e4).contains(&b), "{b}");
@@ -442,7 +436,7 @@ fn heaps_irregular_a_decade_early_fail_the_regime_criterion() {
             p.metrics.get_mut("surface_roughness").unwrap().mean = Some(1.0);
         }
     }
-    let early = row(&(ep21::PAPER.compare)(&study(heaps)));
+    let early = row(&(ep21::PAPER.compare)(&study(heaps)), regime);
     assert_eq!(early.verdict, "differs", "{early:?}");
     let b = early.ours.unwrap().mean.unwrap();
     assert!((5e2..2e3).contains(&b), "{b}");

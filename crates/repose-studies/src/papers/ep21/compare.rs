@@ -69,15 +69,23 @@ fn fit_rows(
 }
 
 fn missing(quantity: String, paper: f64, unit: &str, why: &str) -> Comparison {
-    Comparison::statement(
-        quantity,
-        format!("{paper} {unit}").trim_end().to_string(),
-        None,
-        None,
-        false,
-        why.to_string(),
-    )
-    .with_verdict("no result")
+    no_result(&quantity, format!("{paper} {unit}").trim_end(), why)
+}
+
+/// A row with nothing to judge, saying why.
+pub(super) fn no_result(quantity: &str, paper: &str, why: &str) -> Comparison {
+    Comparison::statement(quantity, paper, None, None, false, why).with_verdict("no result")
+}
+
+/// A fitted constant as our value: its estimate and standard error, over
+/// the fit's points.
+pub(super) fn fitted(p: &Param, points: usize) -> Aggregate {
+    Aggregate {
+        n: i64::try_from(points).unwrap_or(i64::MAX),
+        mean: Some(p.value),
+        sd: None,
+        sem: Some(p.se),
+    }
 }
 
 /// A fitted constant against the paper's: it agrees when the paper's value
@@ -91,12 +99,7 @@ fn param_row(
     points: usize,
     differs: &str,
 ) -> Comparison {
-    let ours = Aggregate {
-        n: i64::try_from(points).unwrap_or(i64::MAX),
-        mean: Some(p.value),
-        sd: None,
-        sem: Some(p.se),
-    };
+    let ours = fitted(p, points);
     let sigma = (p.se > 0.0).then(|| (p.value - paper) / p.se);
     let inside = p.lo <= paper && paper <= p.hi;
     let wide = 0.5 * (p.hi - p.lo) > paper.abs();
@@ -124,9 +127,31 @@ fn param_row(
     }
 }
 
-fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
+/// Eq. 1 with both constants free on the heaps on Earth (fig. 2).
+pub(super) fn eq1_fit(heaps: &SweepData) -> Result<Fit, String> {
     let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps), &QUANTITIES);
-    let result = fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string());
+    fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string())
+}
+
+/// Eq. 2 with its exponent free, on D fitted at each gravity level.
+pub(super) fn eq2_fit(heaps: &SweepData) -> Result<Fit, String> {
+    fit(&EQ2, &d_data(&d_by_gravity(heaps)), &[80.0, 0.5]).map_err(|e| e.to_string())
+}
+
+/// Eq. 4 on every heap's mean against its Bond number.
+pub(super) fn eq4_fit(heaps: &SweepData) -> Result<Fit, String> {
+    let data = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
+    fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string())
+}
+
+/// The packing fit on every column's mean against d√g̃.
+pub(super) fn packing_fit(packing: &SweepData) -> Result<Fit, String> {
+    let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing, &QUANTITIES);
+    fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string())
+}
+
+fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
+    let result = eq1_fit(heaps);
     fit_rows(
         "eq. 1 on Earth",
         result,
@@ -140,7 +165,7 @@ fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
 
 fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
     let data = d_data(&d_by_gravity(heaps));
-    let free = fit(&EQ2, &data, &[80.0, 0.5]).map_err(|e| e.to_string());
+    let free = eq2_fit(heaps);
     let half = fit(&EQ2_HALF, &data, &[80.0]).map_err(|e| e.to_string());
     let mut rows = fit_rows(
         "eq. 2, D = D₀ g̃^−α",
@@ -158,8 +183,7 @@ fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let data = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
-    let result = fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string());
+    let result = eq4_fit(heaps);
     fit_rows(
         "eq. 4",
         result,
@@ -253,17 +277,21 @@ fn rise_sign_row(rise: Option<Aggregate>) -> Comparison {
     c
 }
 
+/// A metric of the heaps without cohesion, its means averaged over the
+/// gravity levels (each level counts once).
+pub(super) fn dry_mean(dry: &SweepData, metric: &str) -> Option<f64> {
+    let v: Vec<f64> = dry
+        .along("ep21.g_tilde", None, metric, &QUANTITIES)
+        .iter()
+        .filter_map(|(_, a)| a.mean)
+        .collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
 /// μ_∞ of eqs. 1 and 4 is the angle of heaps without cohesion (tan θ_r,nc):
 /// where it differs, its first measured cause is the same run's dry heaps.
 fn asymptote_cause(rows: &mut [Comparison], dry: &SweepData) {
-    let level = |metric: &str| {
-        let v: Vec<f64> = dry
-            .along("ep21.g_tilde", None, metric, &QUANTITIES)
-            .iter()
-            .filter_map(|(_, a)| a.mean)
-            .collect();
-        (!v.is_empty()).then(|| (v.iter().sum::<f64>() / v.len() as f64).to_radians().tan())
-    };
+    let level = |metric: &str| dry_mean(dry, metric).map(|t| t.to_radians().tan());
     let (Some(columns), Some(outline)) = (level("theta_r"), level("theta_r_silhouette")) else {
         return;
     };
@@ -283,14 +311,7 @@ fn asymptote_cause(rows: &mut [Comparison], dry: &SweepData) {
 /// What moves the dry level, measured on the same heaps: the angle read
 /// from the heap's silhouette, as the paper reads its images.
 fn dry_level_cause(dry: &SweepData) -> String {
-    let mean_of = |metric: &str| {
-        let v: Vec<f64> = dry
-            .along("ep21.g_tilde", None, metric, &QUANTITIES)
-            .iter()
-            .filter_map(|(_, a)| a.mean)
-            .collect();
-        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
-    };
+    let mean_of = |metric: &str| dry_mean(dry, metric);
     let mut why = String::from("our heaps without cohesion stand steeper than the paper's");
     if let (Some(columns), Some(outline)) = (mean_of("theta_r"), mean_of("theta_r_silhouette")) {
         why.push_str(&format!(
@@ -306,8 +327,7 @@ fn dry_level_cause(dry: &SweepData) -> String {
 }
 
 fn packing_rows(packing: &SweepData) -> Vec<Comparison> {
-    let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing, &QUANTITIES);
-    let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
+    let result = packing_fit(packing);
     fit_rows(
         "packing fit",
         result,

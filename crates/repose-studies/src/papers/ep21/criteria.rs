@@ -3,15 +3,13 @@
 //! constants, the packing fit's), each judged as passed or not beside the
 //! statistical verdicts of the comparison.
 
-use super::curves::{
-    ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, EQ2, EQ4, MU_INF, MU_INF_BOND, PACKING, PHI_INF,
-};
-use super::figures::{d_by_gravity, d_data, on_earth};
+use super::compare::{dry_mean, eq1_fit, eq2_fit, eq4_fit, fitted, no_result, packing_fit};
+use super::curves::{ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, MU_INF, MU_INF_BOND, PHI_INF};
+use super::figures::on_earth;
 use super::quantities::{bond, d_um, g_tilde, BOND_REGIME_I, QUANTITIES};
 use crate::compare::Comparison;
 use crate::data::{StudyData, SweepData};
-use crate::fit::{fit, Fit, Param};
-use crate::fitted::Along;
+use crate::fit::{Fit, Param};
 use repose_store::Aggregate;
 
 /// Eq. 1 with the paper's constants at 1 mm: 25.92°.
@@ -30,8 +28,7 @@ pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
         rows.extend(heap_fits(heaps));
     }
     if let Some(packing) = data.get("packing") {
-        let data = Along::means("ep21.d_sqrt_g_um", "packing_fraction", packing, &QUANTITIES);
-        let result = fit(&PACKING, &data, &[0.6, 0.5, 100.0]).map_err(|e| e.to_string());
+        let result = packing_fit(packing);
         rows.push(param_criterion(
             ("criterion: φ_∞ (packing fit)", &format!("{PHI_INF} ± 0.01")),
             &result,
@@ -54,14 +51,11 @@ pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
 /// Fig. 2's eq. 1 on Earth (the paper's constants inside our 95 %
 /// interval or within 25 % of ours), eq. 2's exponent and eq. 4.
 fn heap_fits(heaps: &SweepData) -> Vec<Comparison> {
-    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps), &QUANTITIES);
-    let eq1 = fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string());
+    let eq1 = eq1_fit(heaps);
     let near = |paper: f64| {
         move |p: &Param| (p.lo..=p.hi).contains(&paper) || within(p.value, paper, 0.25)
     };
-    let eq2 = fit(&EQ2, &d_data(&d_by_gravity(heaps)), &[80.0, 0.5]).map_err(|e| e.to_string());
-    let bond = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
-    let eq4 = fit(&EQ4, &bond, &[0.45, 0.02]).map_err(|e| e.to_string());
+    let (eq2, eq4) = (eq2_fit(heaps), eq4_fit(heaps));
     vec![
         param_criterion(
             (
@@ -152,20 +146,14 @@ fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
 fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
     let quantity = "criterion: regime I/II boundary (Bo)";
     let rule = "10⁴ within a factor 3";
-    let regular: Vec<f64> = dry
-        .map(|d| d.along("ep21.g_tilde", None, "surface_roughness", &QUANTITIES))
-        .unwrap_or_default()
-        .iter()
-        .filter_map(|(_, a)| a.mean)
-        .collect();
-    if regular.is_empty() {
+    let Some(regular) = dry.and_then(|d| dry_mean(d, "surface_roughness")) else {
         return no_result(
             quantity,
             rule,
             "no heap without cohesion to measure regularity by",
         );
-    }
-    let limit = 2.0 * regular.iter().sum::<f64>() / regular.len() as f64;
+    };
+    let limit = 2.0 * regular;
     let mut points: Vec<(f64, bool)> = heaps
         .points
         .iter()
@@ -258,21 +246,12 @@ fn param_criterion(
         Err(e) => return no_result(quantity, rule, e),
     };
     let (p, points) = p;
-    let ours = Aggregate {
-        n: i64::try_from(points).unwrap_or(i64::MAX),
-        mean: Some(p.value),
-        sd: None,
-        sem: Some(p.se),
-    };
+    let ours = fitted(p, points);
     let why = format!(
         "ours {:.4} ± {:.4}, 95 % interval [{:.4}, {:.4}]",
         p.value, p.se, p.lo, p.hi
     );
     Comparison::statement(quantity, rule, Some(ours), None, passes(p), why)
-}
-
-fn no_result(quantity: &str, rule: &str, why: &str) -> Comparison {
-    Comparison::statement(quantity, rule, None, None, false, why).with_verdict("no result")
 }
 
 /// Whether `value` is within the fraction `tolerance` of `paper`.
