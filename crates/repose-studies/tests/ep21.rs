@@ -442,3 +442,70 @@ fn heaps_irregular_a_decade_early_fail_the_regime_criterion() {
     assert!((5e2..2e3).contains(&b), "{b}");
     assert!(early.reason.contains("above 0.60 d"), "{}", early.reason);
 }
+
+/// The criteria judge a heap's angle as the paper reads it, by its
+/// silhouette, when every heap has that reading: heaps whose silhouette
+/// follows the paper's curves while their columns stand 2° higher pass
+/// the 1 mm criterion and eq. 1's, and the rows quote both readings. Heaps
+/// stored without a silhouette reading are judged by their columns.
+#[test]
+fn criteria_read_the_heaps_as_the_paper_reads_its_images() {
+    let mut heaps = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
+    for p in &mut heaps.points {
+        let outline = p.metrics["theta_r"];
+        p.metrics.get_mut("theta_r").unwrap().mean = outline.mean.map(|m| m + 2.0);
+        p.metrics.insert("theta_r_silhouette".into(), outline);
+    }
+    let rows = (ep21::PAPER.compare)(&study(heaps.clone()));
+    let one_mm = row(&rows, "criterion: θ_r of 1 mm");
+    assert_eq!(one_mm.verdict, "agrees", "{one_mm:?}");
+    assert!(
+        one_mm.reason.contains("read by the heaps' silhouette")
+            && one_mm
+                .reason
+                .contains("read by columns filled to their highest grain"),
+        "{}",
+        one_mm.reason
+    );
+    // The columns' reading stands 2° above the silhouette's.
+    let columns: f64 = one_mm.reason.split(", ").last().unwrap()[..5]
+        .parse()
+        .unwrap();
+    let silhouette = one_mm.ours.unwrap().mean.unwrap();
+    assert!(
+        (columns - silhouette - 2.0).abs() < 0.01,
+        "{}",
+        one_mm.reason
+    );
+    for q in ["criterion: μ_∞ (eq. 1", "criterion: D_E (eq. 1"] {
+        let c = row(&rows, q);
+        assert_eq!(c.verdict, "agrees", "{c:?}");
+        assert!(c.reason.ends_with("as the paper reads its images"), "{c:?}");
+    }
+    // One heap without the silhouette's reading: every heap is judged by
+    // its columns, and the 1 mm heap, 2° above eq. 1, fails.
+    heaps.points[0].metrics.remove("theta_r_silhouette");
+    let rows = (ep21::PAPER.compare)(&study(heaps));
+    let one_mm = row(&rows, "criterion: θ_r of 1 mm");
+    assert_eq!(one_mm.verdict, "differs", "{one_mm:?}");
+    assert!(
+        one_mm.reason.starts_with("+2.0") && one_mm.reason.contains("read by columns"),
+        "{}",
+        one_mm.reason
+    );
+    // Its reason splits the miss into the dry level on Earth (23.66° by
+    // the columns of `dry`) and what cohesion adds to it: eq. 1 adds
+    // 25.92° − atan 0.447 = 1.83°.
+    assert!(
+        one_mm
+            .reason
+            .contains("without cohesion on Earth stand at 23.66° read the same way, -0.42°"),
+        "{}",
+        one_mm.reason
+    );
+    assert!(
+        one_mm.reason.ends_with("where eq. 1 raises it by +1.83°"),
+        "{}",
+        one_mm.reason
+    );
+}

@@ -7,7 +7,7 @@ use super::curves::{
     PACKING, PHI_C, PHI_INF,
 };
 use super::figures::{d_by_gravity, d_data, on_earth};
-use super::quantities::{d_um, g_tilde, QUANTITIES};
+use super::quantities::{d_um, g_tilde, QUANTITIES, THETA_COLUMNS};
 use crate::compare::{pooled_slope, Comparison};
 use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Fit, Param};
@@ -127,20 +127,22 @@ fn param_row(
     }
 }
 
-/// Eq. 1 with both constants free on the heaps on Earth (fig. 2).
-pub(super) fn eq1_fit(heaps: &SweepData) -> Result<Fit, String> {
-    let earth = Along::means("ep21.d_um", "theta_r", &on_earth(heaps), &QUANTITIES);
+/// Eq. 1 with both constants free on the heaps on Earth (fig. 2), their
+/// angle read as `angle` (a metric: `theta_r` or `theta_r_silhouette`).
+pub(super) fn eq1_fit(heaps: &SweepData, angle: &str) -> Result<Fit, String> {
+    let earth = Along::means("ep21.d_um", angle, &on_earth(heaps), &QUANTITIES);
     fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string())
 }
 
 /// Eq. 2 with its exponent free, on D fitted at each gravity level.
-pub(super) fn eq2_fit(heaps: &SweepData) -> Result<Fit, String> {
-    fit(&EQ2, &d_data(&d_by_gravity(heaps)), &[80.0, 0.5]).map_err(|e| e.to_string())
+pub(super) fn eq2_fit(heaps: &SweepData, angle: &str) -> Result<Fit, String> {
+    let data = d_data(&d_by_gravity(heaps, angle));
+    fit(&EQ2, &data, &[80.0, 0.5]).map_err(|e| e.to_string())
 }
 
 /// Eq. 4 on every heap's mean against its Bond number.
-pub(super) fn eq4_fit(heaps: &SweepData) -> Result<Fit, String> {
-    let data = Along::means("ep21.bond", "theta_r", heaps, &QUANTITIES);
+pub(super) fn eq4_fit(heaps: &SweepData, angle: &str) -> Result<Fit, String> {
+    let data = Along::means("ep21.bond", angle, heaps, &QUANTITIES);
     fit(&EQ4, &data, &[0.45, 0.02]).map_err(|e| e.to_string())
 }
 
@@ -151,7 +153,7 @@ pub(super) fn packing_fit(packing: &SweepData) -> Result<Fit, String> {
 }
 
 fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let result = eq1_fit(heaps);
+    let result = eq1_fit(heaps, THETA_COLUMNS);
     fit_rows(
         "eq. 1 on Earth",
         result,
@@ -164,8 +166,8 @@ fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let data = d_data(&d_by_gravity(heaps));
-    let free = eq2_fit(heaps);
+    let data = d_data(&d_by_gravity(heaps, THETA_COLUMNS));
+    let free = eq2_fit(heaps, THETA_COLUMNS);
     let half = fit(&EQ2_HALF, &data, &[80.0]).map_err(|e| e.to_string());
     let mut rows = fit_rows(
         "eq. 2, D = D₀ g̃^−α",
@@ -183,7 +185,7 @@ fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let result = eq4_fit(heaps);
+    let result = eq4_fit(heaps, THETA_COLUMNS);
     fit_rows(
         "eq. 4",
         result,

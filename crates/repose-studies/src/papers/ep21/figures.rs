@@ -5,7 +5,9 @@ use super::curves::{
     ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ1_HELD, EQ2, EQ2_HALF, EQ4, MU_INF,
     MU_INF_BOND, PACKING, PHI_C, PHI_INF,
 };
-use super::quantities::{g_tilde, BOND_REGIME_I, DENSITY, G_EARTH, QUANTITIES, SURFACE_ENERGY};
+use super::quantities::{
+    g_tilde, BOND_REGIME_I, DENSITY, G_EARTH, QUANTITIES, SURFACE_ENERGY, THETA_COLUMNS,
+};
 use crate::data::SweepData;
 use crate::draw::measured;
 use crate::figure::{Figure, FitData, Kind, Layer, PlotPoint, SeriesData};
@@ -178,11 +180,11 @@ pub type FittedD = Result<(f64, f64), String>;
 
 /// D fitted at each gravity level (eq. 1, μ_∞ held), with its standard
 /// error: the data of fig. 3C.
-pub fn d_by_gravity(d: &SweepData) -> Vec<(f64, FittedD)> {
+pub fn d_by_gravity(d: &SweepData, angle: &str) -> Vec<(f64, FittedD)> {
     let along = Along {
         x: D,
         by: Some(G),
-        y: "theta_r",
+        y: angle,
         keep: every,
         quantities: &QUANTITIES,
     };
@@ -220,7 +222,7 @@ pub fn d_data(found: &[(f64, FittedD)]) -> Vec<Datum> {
 
 /// Fig. 3C: D against g̃ with eq. 2 fitted free and with the exponent ½.
 fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
-    let found = d_by_gravity(d);
+    let found = d_by_gravity(d, THETA_COLUMNS);
     let points: Vec<PlotPoint> = found
         .iter()
         .filter_map(|(g, f)| {

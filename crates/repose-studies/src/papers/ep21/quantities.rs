@@ -16,6 +16,13 @@ pub const SURFACE_ENERGY: f64 = 0.05;
 /// The Bond number above which the paper sees irregular heaps (regime I).
 pub const BOND_REGIME_I: f64 = 1e4;
 
+/// A heap's angle read from columns one diameter wide, each filled to its
+/// highest grain's top: the headline metric of every committed heap.
+pub const THETA_COLUMNS: &str = "theta_r";
+/// The same heap's angle read from the upper boundary of its projection,
+/// as the paper reads its images.
+pub const THETA_SILHOUETTE: &str = "theta_r_silhouette";
+
 pub static QUANTITIES: [Quantity; 4] = [
     Quantity {
         name: "ep21.d_um",
