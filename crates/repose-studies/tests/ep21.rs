@@ -182,7 +182,15 @@ fn constants_far_from_the_papers_are_judged_to_differ() {
         "{}",
         one_mm.reason
     );
-    assert_eq!(row(&rows, "criterion: μ_∞ (eq. 1").verdict, "differs");
+    let mu_criterion = row(&rows, "criterion: μ_∞ (eq. 1");
+    assert_eq!(mu_criterion.verdict, "differs");
+    assert!(
+        mu_criterion
+            .reason
+            .contains("the row of the same constant above names its measured cause"),
+        "{}",
+        mu_criterion.reason
+    );
     // Its first cause is the run's own dry level, about 24° (tan 0.44).
     let why = &row(&rows, "μ_∞ (eq. 1").reason;
     assert!(

@@ -306,6 +306,8 @@ fn one_mm_on_earth(heaps: &SweepData, dry: Option<&SweepData>, reading: Reading)
 }
 
 /// A fitted constant judged by `passes`; "no result" where the fit failed.
+/// A constant that fails points to its statistical row, which names the
+/// measured cause.
 fn param_criterion(
     (quantity, rule): (&str, &str),
     result: &Result<Fit, String>,
@@ -319,11 +321,15 @@ fn param_criterion(
     };
     let (p, points) = p;
     let ours = fitted(p, points);
-    let why = format!(
+    let mut why = format!(
         "ours {:.4} ± {:.4}, 95 % interval [{:.4}, {:.4}]",
         p.value, p.se, p.lo, p.hi
     );
-    Comparison::statement(quantity, rule, Some(ours), None, passes(p), why)
+    let passes = passes(p);
+    if !passes {
+        why += "; the row of the same constant above names its measured cause";
+    }
+    Comparison::statement(quantity, rule, Some(ours), None, passes, why)
 }
 
 /// Whether `value` is within the fraction `tolerance` of `paper`.
