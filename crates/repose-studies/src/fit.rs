@@ -80,11 +80,22 @@ struct Problem<'a> {
     model: &'a Model,
     data: &'a [Datum],
     p: DVector<f64>,
+    /// Constants of the model held at given values, after the free ones.
+    held: &'a [f64],
 }
 
 impl Problem<'_> {
     fn weight(d: &Datum) -> f64 {
         d.sigma.map_or(1.0, |s| 1.0 / s)
+    }
+
+    /// The model at `x` with the free parameters `p` and the held ones.
+    fn eval(&self, x: f64, p: &[f64]) -> f64 {
+        let mut all = [0.0; 8];
+        let n = p.len() + self.held.len();
+        all[..p.len()].copy_from_slice(p);
+        all[p.len()..n].copy_from_slice(self.held);
+        (self.model.f)(x, &all[..n])
     }
 }
 
@@ -107,7 +118,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
             self.data.len(),
             self.data
                 .iter()
-                .map(|d| ((self.model.f)(d.x, p) - d.y) * Self::weight(d)),
+                .map(|d| (self.eval(d.x, p) - d.y) * Self::weight(d)),
         );
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
@@ -122,7 +133,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
             up[k] += h;
             down[k] -= h;
             for (i, d) in self.data.iter().enumerate() {
-                let df = (self.model.f)(d.x, up.as_slice()) - (self.model.f)(d.x, down.as_slice());
+                let df = self.eval(d.x, up.as_slice()) - self.eval(d.x, down.as_slice());
                 j[(i, k)] = df / (2.0 * h) * Self::weight(d);
             }
         }
@@ -132,6 +143,18 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 
 /// Fits `model` to `data` from the starting parameters `start`.
 pub fn fit(model: &Model, data: &[Datum], start: &[f64]) -> Result<Fit, FitError> {
+    fit_holding(model, data, start, &[])
+}
+
+/// Fits the parameters `model` names to `data` from `start`, its further
+/// constants held at `held` (the model's function reads them after the
+/// named ones; at most eight in all).
+pub fn fit_holding(
+    model: &Model,
+    data: &[Datum],
+    start: &[f64],
+    held: &[f64],
+) -> Result<Fit, FitError> {
     let (n, m) = (data.len(), model.params.len());
     if n <= m {
         return Err(FitError::TooFewPoints {
@@ -143,13 +166,14 @@ pub fn fit(model: &Model, data: &[Datum], start: &[f64]) -> Result<Fit, FitError
     let finite = data.iter().all(|d| {
         d.x.is_finite() && d.y.is_finite() && d.sigma.is_none_or(|s| s.is_finite() && s > 0.0)
     });
-    if !finite || start.len() != m {
+    if !finite || start.len() != m || m + held.len() > 8 {
         return Err(FitError::BadData { model: model.name });
     }
     let problem = Problem {
         model,
         data,
         p: DVector::from_column_slice(start),
+        held,
     };
     let (problem, report) = LevenbergMarquardt::new().minimize(problem);
     if !report.termination.was_successful() {
@@ -188,14 +212,18 @@ pub fn fit(model: &Model, data: &[Datum], start: &[f64]) -> Result<Fit, FitError
         params,
         points: n,
         dof,
-        r2: r_squared(model, data, problem.p.as_slice()),
+        r2: r_squared(&problem),
     })
 }
 
-fn r_squared(model: &Model, data: &[Datum], p: &[f64]) -> f64 {
+fn r_squared(problem: &Problem) -> f64 {
+    let (data, p) = (problem.data, problem.p.as_slice());
     let mean = data.iter().map(|d| d.y).sum::<f64>() / data.len() as f64;
     let total: f64 = data.iter().map(|d| (d.y - mean).powi(2)).sum();
-    let residual: f64 = data.iter().map(|d| ((model.f)(d.x, p) - d.y).powi(2)).sum();
+    let residual: f64 = data
+        .iter()
+        .map(|d| (problem.eval(d.x, p) - d.y).powi(2))
+        .sum();
     if total > 0.0 {
         1.0 - residual / total
     } else {

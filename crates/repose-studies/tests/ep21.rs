@@ -517,3 +517,64 @@ fn criteria_read_the_heaps_as_the_paper_reads_its_images() {
         one_mm.reason
     );
 }
+
+/// Heaps whose level stands above the paper's (μ_∞ = 0.50) with the
+/// paper's D = 87 µm/√g̃: the paper's procedure, applied to them, holds
+/// their own μ_∞ at every gravity level and gives back the exponent ½;
+/// holding the paper's 0.447 instead would count the higher level as
+/// cohesion, most at strong gravity, and flatten D(g̃) (0.477 here).
+#[test]
+fn eq2s_exponent_is_judged_with_the_runs_own_mu_held() {
+    let rows = (ep21::PAPER.compare)(&study(heaps(0.50, curves::D_EARTH_UM, 0.5)));
+    let alpha = row(&rows, "criterion: α (eq. 2)");
+    assert_eq!(alpha.verdict, "agrees", "{alpha:?}");
+    let ours = alpha.ours.unwrap().mean.unwrap();
+    assert!((ours - 0.5).abs() < 0.05, "{ours}");
+    assert!(
+        alpha
+            .reason
+            .contains("μ_∞ held at our eq. 1 fit on Earth, 0.50"),
+        "{}",
+        alpha.reason
+    );
+    let papers: f64 = alpha.reason.split("with 0.447 held, α = ").nth(1).unwrap()[..5]
+        .parse()
+        .unwrap();
+    assert!(papers < ours - 0.01, "{papers} against {ours}");
+    // The statistical row keeps the paper's procedure with its 0.447.
+    let free = row(&rows, "α (eq. 2");
+    assert!(
+        (free.ours.unwrap().mean.unwrap() - papers).abs() < 1e-3,
+        "{free:?}"
+    );
+}
+
+/// One heap just over the roughness limit far below the boundary (60 µm
+/// at g̃ = 10, Bo = 680), among regular heaps up to Bo ≈ 10⁴: the
+/// boundary stays where the most points put it and that heap is named.
+#[test]
+fn one_rough_heap_does_not_move_the_regime_boundary() {
+    let mut heaps = heaps(curves::MU_INF, curves::D_EARTH_UM, 0.5);
+    let rough = heaps
+        .points
+        .iter_mut()
+        .find(|p| {
+            p.point["grains.diameter"].as_f64() == Some(60.0 * 1e-6)
+                && p.point["gravity"] == gravity(10.0)
+        })
+        .unwrap();
+    rough.metrics.get_mut("surface_roughness").unwrap().mean = Some(0.65);
+    let c = row(
+        &(ep21::PAPER.compare)(&study(heaps)),
+        "criterion: regime I/II",
+    );
+    assert_eq!(c.verdict, "agrees", "{c:?}");
+    let b = c.ours.unwrap().mean.unwrap();
+    assert!((5e3..2e4).contains(&b), "{b}");
+    assert!(
+        c.reason
+            .ends_with("leaves 1 there: Bo = 6.796e2 (irregular)"),
+        "{}",
+        c.reason
+    );
+}

@@ -134,9 +134,10 @@ pub(super) fn eq1_fit(heaps: &SweepData, angle: &str) -> Result<Fit, String> {
     fit(&EQ1, &earth, &[0.45, 80.0]).map_err(|e| e.to_string())
 }
 
-/// Eq. 2 with its exponent free, on D fitted at each gravity level.
-pub(super) fn eq2_fit(heaps: &SweepData, angle: &str) -> Result<Fit, String> {
-    let data = d_data(&d_by_gravity(heaps, angle));
+/// Eq. 2 with its exponent free, on D fitted at each gravity level with
+/// μ_∞ held at `mu`.
+pub(super) fn eq2_fit(heaps: &SweepData, angle: &str, mu: f64) -> Result<Fit, String> {
+    let data = d_data(&d_by_gravity(heaps, angle, mu));
     fit(&EQ2, &data, &[80.0, 0.5]).map_err(|e| e.to_string())
 }
 
@@ -166,8 +167,8 @@ fn eq1_rows(heaps: &SweepData) -> Vec<Comparison> {
 }
 
 fn eq2_rows(heaps: &SweepData) -> Vec<Comparison> {
-    let data = d_data(&d_by_gravity(heaps, THETA_COLUMNS));
-    let free = eq2_fit(heaps, THETA_COLUMNS);
+    let data = d_data(&d_by_gravity(heaps, THETA_COLUMNS, MU_INF));
+    let free = eq2_fit(heaps, THETA_COLUMNS, MU_INF);
     let half = fit(&EQ2_HALF, &data, &[80.0]).map_err(|e| e.to_string());
     let mut rows = fit_rows(
         "eq. 2, D = D₀ g̃^−α",

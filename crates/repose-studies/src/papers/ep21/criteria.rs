@@ -105,7 +105,7 @@ fn heap_fits(heaps: &SweepData, reading: Reading) -> Vec<Comparison> {
     let near = |paper: f64| {
         move |p: &Param| (p.lo..=p.hi).contains(&paper) || within(p.value, paper, 0.25)
     };
-    let (eq2, eq4) = (eq2_fit(heaps, angle), eq4_fit(heaps, angle));
+    let eq4 = eq4_fit(heaps, angle);
     let read = |row: Comparison| {
         let reason = format!("{}; θ_r read {}", row.reason, Reading::name(angle));
         Comparison { reason, ..row }
@@ -129,15 +129,7 @@ fn heap_fits(heaps: &SweepData, reading: Reading) -> Vec<Comparison> {
             "D_um",
             near(D_EARTH_UM),
         ),
-        param_criterion(
-            (
-                "criterion: α (eq. 2)",
-                &format!("{ALPHA}, within 0.35 – 0.65"),
-            ),
-            &eq2,
-            "alpha",
-            |p| (0.35..=0.65).contains(&p.value),
-        ),
+        exponent(heaps, angle, &eq1),
         param_criterion(
             ("criterion: β (eq. 4)", &format!("{BETA} within a factor 2")),
             &eq4,
@@ -155,6 +147,46 @@ fn heap_fits(heaps: &SweepData, reading: Reading) -> Vec<Comparison> {
         ),
     ];
     rows.into_iter().map(read).collect()
+}
+
+/// Eq. 2's exponent within 0.35–0.65, by the paper's procedure on our
+/// heaps: D at each gravity level fitted with μ_∞ held at our own eq. 1
+/// fit on Earth, as the paper holds its own 0.447 (which our heaps get
+/// only where that fit failed); the exponent with 0.447 held is quoted.
+fn exponent(heaps: &SweepData, angle: &str, eq1: &Result<Fit, String>) -> Comparison {
+    let ours = eq1
+        .as_ref()
+        .ok()
+        .and_then(|f| f.param("mu_inf"))
+        .map(|p| p.value);
+    let mu = ours.unwrap_or(MU_INF);
+    let row = param_criterion(
+        (
+            "criterion: α (eq. 2)",
+            &format!("{ALPHA}, within 0.35 – 0.65"),
+        ),
+        &eq2_fit(heaps, angle, mu),
+        "alpha",
+        |p| (0.35..=0.65).contains(&p.value),
+    );
+    let held = match ours {
+        Some(mu) => {
+            format!("μ_∞ held at our eq. 1 fit on Earth, {mu:.4}, as the paper holds its own")
+        }
+        None => format!("μ_∞ held at the paper's {MU_INF}: our eq. 1 fit on Earth failed"),
+    };
+    let papers = eq2_fit(heaps, angle, MU_INF)
+        .ok()
+        .and_then(|f| {
+            f.param("alpha")
+                .map(|p| format!("; with {MU_INF} held, α = {:.3}", p.value))
+        })
+        .unwrap_or_default();
+    let reason = format!(
+        "{}; D of each gravity level fitted with {held}{papers}",
+        row.reason
+    );
+    Comparison { reason, ..row }
 }
 
 /// A heap at every point with d ≥ d_c/2 (d_c = 50 µm/√g̃, the paper's
@@ -195,9 +227,10 @@ fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
 /// Where our heaps turn irregular, in Bond number, within a factor 3 of
 /// the paper's Bo ≈ 10⁴. A point is irregular where no heap formed or
 /// its outline strays from its triangle (rms, in d) by more than twice as
-/// much as the heaps without cohesion do on average; the boundary is the
-/// geometric mean of the smallest irregular Bo and the largest regular
-/// one below it.
+/// much as the heaps without cohesion do on average; the boundary lies
+/// between the two neighbouring Bo (their geometric mean) that leave the
+/// fewest points on the wrong side, and those points are named: one
+/// heap just over the limit does not move it.
 fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
     let quantity = "criterion: regime I/II boundary (Bo)";
     let rule = "10⁴ within a factor 3";
@@ -219,14 +252,25 @@ fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
         })
         .collect();
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let first = points.iter().find(|p| p.1).map(|p| p.0);
-    let below = points
-        .iter()
-        .rev()
-        .find(|p| !p.1 && first.is_none_or(|f| p.0 < f))
-        .map(|p| p.0);
     let criterion = format!("irregular: no heap, or an outline rms above {limit:.2} d");
-    let (boundary, why) = match (below, first) {
+    let split = best_split(&points);
+    let exceptions: Vec<String> = points
+        .iter()
+        .enumerate()
+        .filter(|(k, p)| (*k < split) == p.1)
+        .map(|(_, p)| {
+            format!(
+                "{:.3e} ({})",
+                p.0,
+                if p.1 { "irregular" } else { "regular" }
+            )
+        })
+        .collect();
+    let (lo, hi) = (
+        split.checked_sub(1).map(|k| points[k].0),
+        points.get(split).map(|p| p.0),
+    );
+    let (boundary, mut why) = match (lo, hi) {
         (Some(lo), Some(hi)) => (
             (lo * hi).sqrt(),
             format!("regular up to Bo = {lo:.3e}, irregular from {hi:.3e} ({criterion})"),
@@ -246,6 +290,14 @@ fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
             )
         }
     };
+    if !exceptions.is_empty() {
+        why += &format!(
+            "; the boundary that leaves the fewest points on the wrong side leaves {} there: \
+             Bo = {}",
+            exceptions.len(),
+            exceptions.join(", ")
+        );
+    }
     let ours = Aggregate {
         n: points.len() as i64,
         mean: Some(boundary),
@@ -254,6 +306,21 @@ fn regime_boundary(heaps: &SweepData, dry: Option<&SweepData>) -> Comparison {
     };
     let passes = (BOND_REGIME_I / 3.0..=3.0 * BOND_REGIME_I).contains(&boundary);
     Comparison::statement(quantity, rule, Some(ours), None, passes, why)
+}
+
+/// Where, in points sorted by Bo and marked irregular or not, regime I
+/// begins: the index of the first point above the boundary that leaves
+/// the fewest points on the wrong side (irregular below it, regular above
+/// it), the lowest such boundary on a tie; never between equal Bo.
+fn best_split(points: &[(f64, bool)]) -> usize {
+    let wrong = |k: usize| {
+        let below = points[..k].iter().filter(|p| p.1).count();
+        below + points[k..].iter().filter(|p| !p.1).count()
+    };
+    (0..=points.len())
+        .filter(|&k| k == 0 || k == points.len() || points[k - 1].0 < points[k].0)
+        .min_by_key(|&k| (wrong(k), k))
+        .unwrap_or(0)
 }
 
 /// The 1 mm heap on Earth within 1.5° of eq. 1's 25.9°, read as
@@ -352,5 +419,32 @@ mod tests {
         assert!(within(0.50, 0.458, 0.10) && !within(0.51, 0.458, 0.10));
         assert!(within_factor(0.028, 0.014, 2.0) && within_factor(0.007, 0.014, 2.0));
         assert!(!within_factor(0.0290, 0.014, 2.0) && !within_factor(-0.02, 0.014, 2.0));
+    }
+
+    #[test]
+    fn the_regime_split_leaves_the_fewest_points_on_the_wrong_side() {
+        let marked = |v: &[(f64, bool)]| best_split(v);
+        // Regular, one stray irregular, regular, then irregular: one wrong.
+        let p = [
+            (1.0, false),
+            (2.0, true),
+            (3.0, false),
+            (4.0, false),
+            (5.0, true),
+        ];
+        assert_eq!(marked(&p), 4);
+        // All regular, all irregular, and nothing.
+        assert_eq!(marked(&[(1.0, false), (2.0, false)]), 2);
+        assert_eq!(marked(&[(1.0, true), (2.0, true)]), 0);
+        assert_eq!(marked(&[]), 0);
+        // A tie takes the lower boundary; equal Bo are never split.
+        assert_eq!(
+            marked(&[(1.0, false), (2.0, true), (3.0, false), (4.0, true)]),
+            1
+        );
+        assert_eq!(
+            marked(&[(1.0, false), (2.0, false), (2.0, true), (3.0, true)]),
+            1
+        );
     }
 }

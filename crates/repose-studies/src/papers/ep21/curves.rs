@@ -33,6 +33,14 @@ pub static EQ1_HELD: Model = Model {
     f: |d, p| (MU_INF * (1.0 + p[0] / d)).atan().to_degrees(),
 };
 
+/// Eq. 1 with μ_∞ held at a value given to the fit
+/// ([`crate::fit::fit_holding`]): D alone is fitted.
+pub static EQ1_MU_GIVEN: Model = Model {
+    name: "eq. 1, μ_∞ held",
+    params: &["D_um"],
+    f: |d, p| (p[1] * (1.0 + p[0] / d)).atan().to_degrees(),
+};
+
 /// Eq. 2: D(g̃) = D₀ g̃^(−α).
 pub static EQ2: Model = Model {
     name: "eq. 2",
@@ -106,6 +114,16 @@ mod tests {
         )
         .unwrap();
         assert!(close(held.params[0].value, D_EARTH_UM, 1e-6), "{held:?}");
+        // μ_∞ held at another value: D of data made with it.
+        let given = crate::fit::fit_holding(
+            &EQ1_MU_GIVEN,
+            &points(&EQ1, &[0.5, 120.0], &sizes, 0.0),
+            &[30.0],
+            &[0.5],
+        )
+        .unwrap();
+        assert!(close(given.params[0].value, 120.0, 1e-6), "{given:?}");
+        assert_eq!(given.dof, sizes.len() - 1);
 
         let gravities = [0.063, 0.165, 0.378, 1.0, 10.0, 100.0];
         let f = fit(

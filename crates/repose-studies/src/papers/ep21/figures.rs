@@ -2,8 +2,8 @@
 //! again on our heaps and packings.
 
 use super::curves::{
-    ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ1_HELD, EQ2, EQ2_HALF, EQ4, MU_INF,
-    MU_INF_BOND, PACKING, PHI_C, PHI_INF,
+    ALPHA, BETA, D0_UM, D_EARTH_UM, D_PHI_UM, EQ1, EQ1_HELD, EQ1_MU_GIVEN, EQ2, EQ2_HALF, EQ4,
+    MU_INF, MU_INF_BOND, PACKING, PHI_C, PHI_INF,
 };
 use super::quantities::{
     g_tilde, BOND_REGIME_I, DENSITY, G_EARTH, QUANTITIES, SURFACE_ENERGY, THETA_COLUMNS,
@@ -178,9 +178,9 @@ fn fig3b() -> Figure {
 /// D and its standard error at one gravity level, or why it has none.
 pub type FittedD = Result<(f64, f64), String>;
 
-/// D fitted at each gravity level (eq. 1, μ_∞ held), with its standard
-/// error: the data of fig. 3C.
-pub fn d_by_gravity(d: &SweepData, angle: &str) -> Vec<(f64, FittedD)> {
+/// D fitted at each gravity level (eq. 1, μ_∞ held at `mu`), with its
+/// standard error: the data of fig. 3C, where `mu` is the paper's 0.447.
+pub fn d_by_gravity(d: &SweepData, angle: &str, mu: f64) -> Vec<(f64, FittedD)> {
     let along = Along {
         x: D,
         by: Some(G),
@@ -193,7 +193,7 @@ pub fn d_by_gravity(d: &SweepData, angle: &str) -> Vec<(f64, FittedD)> {
         .into_iter()
         .filter_map(|(g, data)| {
             let g = g?.as_f64()?;
-            let fit = crate::fit::fit(&EQ1_HELD, &data, &[80.0])
+            let fit = crate::fit::fit_holding(&EQ1_MU_GIVEN, &data, &[80.0], &[mu])
                 .map(|f| (f.params[0].value, f.params[0].se))
                 .map_err(|e| e.to_string());
             Some((g, fit))
@@ -222,7 +222,7 @@ pub fn d_data(found: &[(f64, FittedD)]) -> Vec<Datum> {
 
 /// Fig. 3C: D against g̃ with eq. 2 fitted free and with the exponent ½.
 fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
-    let found = d_by_gravity(d, THETA_COLUMNS);
+    let found = d_by_gravity(d, THETA_COLUMNS, MU_INF);
     let points: Vec<PlotPoint> = found
         .iter()
         .filter_map(|(g, f)| {
