@@ -423,7 +423,6 @@ mod tests {
 
     #[test]
     fn the_regime_split_leaves_the_fewest_points_on_the_wrong_side() {
-        let marked = |v: &[(f64, bool)]| best_split(v);
         // Regular, one stray irregular, regular, then irregular: one wrong.
         let p = [
             (1.0, false),
@@ -432,18 +431,18 @@ mod tests {
             (4.0, false),
             (5.0, true),
         ];
-        assert_eq!(marked(&p), 4);
+        assert_eq!(best_split(&p), 4);
         // All regular, all irregular, and nothing.
-        assert_eq!(marked(&[(1.0, false), (2.0, false)]), 2);
-        assert_eq!(marked(&[(1.0, true), (2.0, true)]), 0);
-        assert_eq!(marked(&[]), 0);
+        assert_eq!(best_split(&[(1.0, false), (2.0, false)]), 2);
+        assert_eq!(best_split(&[(1.0, true), (2.0, true)]), 0);
+        assert_eq!(best_split(&[]), 0);
         // A tie takes the lower boundary; equal Bo are never split.
         assert_eq!(
-            marked(&[(1.0, false), (2.0, true), (3.0, false), (4.0, true)]),
+            best_split(&[(1.0, false), (2.0, true), (3.0, false), (4.0, true)]),
             1
         );
         assert_eq!(
-            marked(&[(1.0, false), (2.0, false), (2.0, true), (3.0, true)]),
+            best_split(&[(1.0, false), (2.0, false), (2.0, true), (3.0, true)]),
             1
         );
     }
