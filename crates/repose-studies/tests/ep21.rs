@@ -578,3 +578,53 @@ fn one_rough_heap_does_not_move_the_regime_boundary() {
         c.reason
     );
 }
+
+/// A heap missing above d_c/2 is set against where eq. 4 carries the
+/// paper's last heaps (Bo ≈ 4·10⁴) onto ours: heaps made with twice the
+/// paper's D_E fit β ≈ 0.035, stand at Bo as the paper's at 6.3 × Bo, and
+/// end near 6.3·10³, so a tower at Bo = 1.8·10⁴ lies beyond that end; with
+/// the paper's own D_E (β ≈ 0.018, end near 2.5·10⁴) it lies short of it.
+#[test]
+fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
+    let judged = |d_earth: f64| {
+        let mut heaps = heaps(curves::MU_INF, d_earth, 0.5);
+        for p in heaps.points.iter_mut().filter(|p| {
+            p.point["grains.diameter"].as_f64() == Some(60.0 * 1e-6)
+                && p.point["gravity"] == gravity(0.378)
+        }) {
+            p.metrics.clear();
+            p.failures = p.samples;
+        }
+        row(
+            &(ep21::PAPER.compare)(&study(heaps)),
+            "criterion: a heap at every",
+        )
+    };
+    // eq. 1 with D = D_E/√g̃ is eq. 4 with β = D_E/√(12γ/(g ρ)) on Earth.
+    let scale_m = (12.0 * 0.05 / (ep21::G_EARTH * 2500.0)).sqrt();
+    let beta_of = |reason: &str| -> f64 {
+        let after = reason.split("β = ").nth(1).expect(reason);
+        after.split(' ').next().unwrap().parse().unwrap()
+    };
+    for (d_earth, side) in [
+        (2.0 * curves::D_EARTH_UM, "beyond it, as far as"),
+        (curves::D_EARTH_UM, "short of it, further than"),
+    ] {
+        let c = judged(d_earth);
+        assert_eq!(c.verdict, "differs");
+        assert!(
+            c.reason
+                .contains("the smallest Bo without a heap is 1.80e4"),
+            "{}",
+            c.reason
+        );
+        let beta = beta_of(&c.reason);
+        let expected = d_earth * 1e-6 / scale_m;
+        assert!(
+            (beta / expected - 1.0).abs() < 0.05,
+            "β {beta} against {expected}"
+        );
+        let ending = format!("lie {side} eq. 4's β accounts for");
+        assert!(c.reason.ends_with(&ending), "{}", c.reason);
+    }
+}

@@ -31,7 +31,7 @@ pub(super) fn rows(data: &StudyData) -> Vec<Comparison> {
     let mut rows = Vec::new();
     if let Some(heaps) = data.get("heaps") {
         let reading = Reading::of(heaps);
-        rows.push(heaps_down_to_half_dc(heaps));
+        rows.push(heaps_down_to_half_dc(heaps, reading));
         rows.push(regime_boundary(heaps, data.get("dry")));
         rows.push(one_mm_on_earth(heaps, data.get("dry"), reading));
         rows.extend(heap_fits(heaps, reading));
@@ -190,17 +190,17 @@ fn exponent(heaps: &SweepData, angle: &str, eq1: &Result<Fit, String>) -> Compar
 }
 
 /// A heap at every point with d ≥ d_c/2 (d_c = 50 µm/√g̃, the paper's
-/// boundary of regime I), judged on the points that have finished.
-fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
+/// boundary of regime I), judged on the points that have finished; a miss
+/// is set against where eq. 4's β puts the paper's last heaps on ours.
+fn heaps_down_to_half_dc(heaps: &SweepData, reading: Reading) -> Comparison {
     let (mut tested, mut none) = (0, Vec::new());
     for p in &heaps.points {
         let (Some(g), Some(d)) = (g_tilde(&p.point), d_um(&p.point)) else {
             continue;
         };
-        let formed = p.metrics.get("theta_r").is_some_and(|a| a.n > 0);
-        if d >= 25.0 / g.sqrt() && (formed || p.failures > 0) {
+        if d >= 25.0 / g.sqrt() && (formed(p) || p.failures > 0) {
             tested += 1;
-            if !formed {
+            if !formed(p) {
                 none.push(format!(
                     "{d} µm at g̃ {g} (d_c/2 = {:.0} µm)",
                     25.0 / g.sqrt()
@@ -217,11 +217,55 @@ fn heaps_down_to_half_dc(heaps: &SweepData) -> Comparison {
         format!("heaps at all {tested} such points")
     } else {
         format!(
-            "no heap (the crest reached the top) at {}, of {tested} such points",
-            none.join(", ")
+            "no heap (the crest reached the top) at {}, of {tested} such points; {}",
+            none.join(", "),
+            where_heaps_end(heaps, reading.metric)
         )
     };
     Comparison::statement(quantity, rule, None, None, none.is_empty(), why)
+}
+
+/// Whether a point formed a heap in any of its samples.
+fn formed(p: &repose_store::Point) -> bool {
+    p.metrics.get("theta_r").is_some_and(|a| a.n > 0)
+}
+
+/// Where our heaps stop forming, in Bond number, against where the
+/// paper's do (d = d_c/2, Bo ≈ 4·10⁴) carried onto our heaps by eq. 4:
+/// with θ_r = atan(μ_∞(1 + β√Bo)), our heaps at Bo stand as the paper's
+/// at Bo·(β/0.014)², so the paper's last heaps fall at 4·10⁴/(β/0.014)²
+/// on our scale.
+fn where_heaps_end(heaps: &SweepData, angle: &str) -> String {
+    let finished = heaps.points.iter().filter(|p| formed(p) || p.failures > 0);
+    let (with, without): (Vec<_>, Vec<_>) = finished.partition(|p| formed(p));
+    let bonds = |of: &[&repose_store::Point]| of.iter().filter_map(|p| bond(&p.point)).collect();
+    let (with, without): (Vec<f64>, Vec<f64>) = (bonds(&with), bonds(&without));
+    let largest = with.iter().copied().reduce(f64::max);
+    let smallest = without.iter().copied().fold(f64::INFINITY, f64::min);
+    let paper_end = 4.0 * BOND_REGIME_I;
+    let mut why = format!("the smallest Bo without a heap is {smallest:.2e}");
+    if let Some(b) = largest {
+        why += &format!(", the largest with one {b:.2e}");
+    }
+    why += &format!("; the paper's heaps end near Bo ≈ {paper_end:.0e} (d = d_c/2)");
+    let fit = eq4_fit(heaps, angle).ok();
+    let Some(beta) = fit.as_ref().and_then(|f| f.param("beta")) else {
+        return why + " (eq. 4 not fitted, so not carried onto our heaps)";
+    };
+    let shift = (beta.value / BETA).powi(2);
+    let ours = paper_end / shift;
+    let verdict = if smallest >= ours {
+        "beyond it, as far as eq. 4's β accounts for"
+    } else {
+        "short of it, further than eq. 4's β accounts for"
+    };
+    why + &format!(
+        "; our eq. 4 β = {:.4} is {:.2}× the paper's, so our heaps stand at Bo as the \
+         paper's at {shift:.2}× that Bo, which carries the paper's end to Bo ≈ {ours:.2e} \
+         on ours: the heaps missing lie {verdict}",
+        beta.value,
+        beta.value / BETA
+    )
 }
 
 /// Where our heaps turn irregular, in Bond number, within a factor 3 of
