@@ -14,11 +14,12 @@ use crate::fit::{fit, Fit, Param};
 use crate::fitted::Along;
 use repose_store::Aggregate;
 
-/// Why the heaps' constants differ, as measured: the model itself at
-/// glass's modulus, then the preset's softening on top, and the form
-/// whose glass-stiff heaps meet eq. 1.
+/// Why the heaps' constants differ, as measured, for each contact form:
+/// as printed, the model itself at glass's modulus and a preset's
+/// softening on top; in the form whose glass-stiff heaps meet eq. 1, the
+/// dry heaps' level.
 const HEAPS_DIFFER: &str =
-    "the paper's value lies outside our 95 % interval. Measured cause: the contact model as printed holds cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and the preset's softening raises them further (its bias under Cost). With the limits on the net normal force and the attraction fading in contact, glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv)";
+    "the paper's value lies outside our 95 % interval. Measured causes, by the contact form the run used: as printed (the default), the contacts hold cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and a softened preset raises them further (its bias under Cost); with the limits on the net normal force and the attraction fading in contact (material.limit_load = net, material.contact_attraction = fading), glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv), and what is left over is the dry heaps' level above the paper's 24° (the θ_r,nc row)";
 
 /// Why the packings' constants differ, as measured on glass-stiff
 /// columns: the column's height, softening, and the forms that fade the
