@@ -11,8 +11,9 @@ use repose_store::Store;
 use repose_studies::data::{StudyData, SweepData};
 use repose_studies::paper::{variant_label, Paper};
 use repose_studies::papers;
+use repose_studies::remaining::{Costed, Remaining, Took};
 use repose_studies::reproduction::{DoneSweep, Reproduction};
-use repose_sweeps::Order;
+use repose_sweeps::{Order, SweepSpec};
 use repose_worker::shutdown_on_signals;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -346,6 +347,49 @@ async fn queue_first(
     Ok(())
 }
 
+/// What the unfinished samples of `sweeps` (id and spec) are estimated
+/// to cost: each spec expanded into its samples as the service expands
+/// it, each sample estimated by its protocol, against what the sweep's
+/// finished samples took.
+async fn remaining(
+    client: &reqwest::Client,
+    server: &str,
+    sweeps: &[(String, Value)],
+) -> anyhow::Result<Option<Remaining>> {
+    let mut costed = Vec::new();
+    for (id, spec) in sweeps {
+        let spec: SweepSpec = serde_json::from_value(spec.clone())?;
+        let jobs = spec.expand()?;
+        let done = get_json(client, &format!("{server}/api/sweeps/{id}/samples")).await?;
+        let took = took_by_hash(&done["samples"]);
+        costed.push(
+            jobs.iter()
+                .map(|j| Costed {
+                    point: j.point.clone(),
+                    estimate: j.estimated_cost().unwrap_or(f64::NAN),
+                    took: took.get(j.sample_hash.as_str()).copied(),
+                })
+                .collect(),
+        );
+    }
+    Ok(Remaining::of(&costed))
+}
+
+/// What each finished sample of a sweep's sample listing took, by its hash.
+fn took_by_hash(samples: &Value) -> BTreeMap<&str, Took> {
+    let listed = samples.as_array().into_iter().flatten();
+    listed
+        .filter_map(|s| {
+            let took = Took {
+                particle_steps: s["particle_steps"].as_f64()?,
+                cpu_s: s["wall_time"].as_f64()?,
+                completed: s["outcome"] == "completed",
+            };
+            Some((s["sample_hash"].as_str()?, took))
+        })
+        .collect()
+}
+
 /// Waits until no queued sweep has jobs left, with a progress bar.
 async fn wait(
     client: &reqwest::Client,
@@ -410,12 +454,13 @@ async fn reproduce(
         .map(|(k, _, q)| format!("{k}:{}", q["id"].as_str().unwrap_or_default()))
         .collect::<Vec<_>>()
         .join(",");
-    let (mut sweeps, mut pending) = (Vec::new(), 0);
+    let (mut sweeps, mut pending, mut specs) = (Vec::new(), 0, Vec::new());
     for (key, title, q) in &queued {
         let id = q["id"].as_str().unwrap_or_default().to_string();
         let sw = get_json(&client, &format!("{server}/api/sweeps/{id}")).await?;
         let open = |k: &str| sw["progress"][k].as_u64().unwrap_or(0);
         pending += open("queued") + open("running");
+        specs.push((id.clone(), sw["spec"].clone()));
         let pts = get_json(&client, &format!("{server}/api/sweeps/{id}/points")).await?;
         sweeps.push(DoneSweep {
             key: key.clone(),
@@ -440,6 +485,15 @@ async fn reproduce(
         paper.key
     );
     let comparison = serde_json::from_value(get_json(&client, &url).await?["comparison"].clone())?;
+    let remaining = match pending {
+        0 => None,
+        _ => remaining(&client, server, &specs)
+            .await
+            .unwrap_or_else(|e| {
+                eprintln!("no estimate of what is left: {e:#}");
+                None
+            }),
+    };
     let report = Reproduction {
         paper: paper.key.into(),
         title: paper.title.into(),
@@ -460,6 +514,7 @@ async fn reproduce(
         metric_labels: metric_labels(paper),
         variant: variant_label(&set),
         pending,
+        remaining,
     };
     report
         .write(&out)
@@ -534,4 +589,45 @@ fn metric_labels(paper: &Paper) -> Vec<(String, String)> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use repose_store::{RunCounts, Sample};
+
+    #[test]
+    fn what_a_sample_took_is_read_from_the_stores_own_listing() {
+        let sample = |hash: &str, outcome: &str| Sample {
+            job_id: "job".into(),
+            sample_hash: hash.into(),
+            point: Default::default(),
+            sample: 0,
+            seed: 0,
+            outcome: outcome.into(),
+            reason: None,
+            metrics: Default::default(),
+            counts: RunCounts {
+                grains_initial: 10,
+                grains_final: 10,
+                grains_lost: 0,
+                iterations: 100,
+                simulated_time: 1.0,
+                wall_time: 2.5,
+                particle_steps: 1000,
+            },
+            engine: "e".into(),
+        };
+        let listing =
+            serde_json::to_value(vec![sample("a", "completed"), sample("b", "unmeasurable")])
+                .unwrap();
+        let took = took_by_hash(&listing);
+        let a = took["a"];
+        assert_eq!(
+            (a.particle_steps, a.cpu_s, a.completed),
+            (1000.0, 2.5, true)
+        );
+        assert!(!took["b"].completed);
+        assert_eq!(took.len(), 2);
+    }
 }

@@ -29,6 +29,7 @@ pub mod fitted;
 pub mod paper;
 pub mod papers;
 pub mod quantity;
+pub mod remaining;
 pub mod reproduction;
 pub mod tradeoff;
 

@@ -6,6 +6,7 @@
 use crate::chart::{Chart, Series, Style};
 use crate::compare::{fmt_agg, Comparison};
 use crate::figure::{FigureData, Kind};
+use crate::remaining::Remaining;
 use repose_store::{Cost, Point};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
@@ -56,6 +57,9 @@ pub struct Reproduction {
     /// Samples not finished when it was written (an interim report).
     #[serde(default)]
     pub pending: u64,
+    /// What those samples are estimated to cost, where it can be told.
+    #[serde(default)]
+    pub remaining: Option<Remaining>,
 }
 
 /// A static chart of a figure's data.
@@ -196,9 +200,10 @@ impl Reproduction {
             let _ = writeln!(
                 s,
                 "**Interim report:** {} of its {total} samples are finished and {} are still queued; \
-                 every number below is of the finished samples alone, and a point without one is missing.\n",
+                 every number below is of the finished samples alone, and a point without one is missing.{}\n",
                 total.saturating_sub(self.pending),
-                self.pending
+                self.pending,
+                self.remaining.map(|r| format!(" {}", r.sentence())).unwrap_or_default()
             );
         }
         let _ = writeln!(s, "## Cost\n");

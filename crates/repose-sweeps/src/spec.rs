@@ -121,6 +121,15 @@ pub struct JobSpec {
     pub sample_hash: String,
 }
 
+impl JobSpec {
+    /// Its protocol's estimate of the sample's particle-steps, if the
+    /// protocol makes one: good for ranking samples and, scaled by what
+    /// finished samples took against theirs, for what a queue has left.
+    pub fn estimated_cost(&self) -> Option<f64> {
+        self.scene.protocol().ok()?.cost(&self.scene)
+    }
+}
+
 fn field_error(field: impl Into<String>, message: impl Into<String>) -> SceneError {
     SceneError {
         errors: vec![FieldError {
@@ -161,9 +170,8 @@ impl SweepSpec {
             }
         }
         if self.order == Order::Cheapest {
-            let cost = |j: &JobSpec| j.scene.protocol().ok()?.cost(&j.scene);
             let mut ranked: Vec<(Option<f64>, JobSpec)> =
-                jobs.into_iter().map(|j| (cost(&j), j)).collect();
+                jobs.into_iter().map(|j| (j.estimated_cost(), j)).collect();
             // Stable: equal costs keep their listed order; unranked go last.
             ranked.sort_by(|(a, _), (b, _)| {
                 let ranked_first = a.is_none().cmp(&b.is_none());
