@@ -607,8 +607,11 @@ fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
         after.split(' ').next().unwrap().parse().unwrap()
     };
     for (d_earth, side) in [
-        (2.0 * curves::D_EARTH_UM, "beyond it, as far as"),
-        (curves::D_EARTH_UM, "short of it, further than"),
+        (2.0 * curves::D_EARTH_UM, "beyond it, as eq. 4's β predicts"),
+        (
+            curves::D_EARTH_UM,
+            "short of it, which eq. 4's β does not account for",
+        ),
     ] {
         let c = judged(d_earth);
         assert_eq!(c.verdict, "differs");
@@ -624,7 +627,7 @@ fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
             (beta / expected - 1.0).abs() < 0.05,
             "β {beta} against {expected}"
         );
-        let ending = format!("lie {side} eq. 4's β accounts for");
+        let ending = format!("lie {side}");
         assert!(c.reason.ends_with(&ending), "{}", c.reason);
     }
 }

@@ -255,9 +255,9 @@ fn where_heaps_end(heaps: &SweepData, angle: &str) -> String {
     let shift = (beta.value / BETA).powi(2);
     let ours = paper_end / shift;
     let verdict = if smallest >= ours {
-        "beyond it, as far as eq. 4's β accounts for"
+        "beyond it, as eq. 4's β predicts"
     } else {
-        "short of it, further than eq. 4's β accounts for"
+        "short of it, which eq. 4's β does not account for"
     };
     why + &format!(
         "; our eq. 4 β = {:.4} is {:.2}× the paper's, so our heaps stand at Bo as the \
