@@ -582,8 +582,9 @@ fn one_rough_heap_does_not_move_the_regime_boundary() {
 /// A heap missing above d_c/2 is set against where eq. 4 carries the
 /// paper's last heaps (Bo ≈ 4·10⁴) onto ours: heaps made with twice the
 /// paper's D_E fit β ≈ 0.035, stand at Bo as the paper's at 6.3 × Bo, and
-/// end near 6.3·10³, so a tower at Bo = 1.8·10⁴ lies beyond that end; with
-/// the paper's own D_E (β ≈ 0.018, end near 2.5·10⁴) it lies short of it.
+/// end near 6.3·10³, so a tower at Bo = 1.8·10⁴ lies beyond that end and
+/// the range β's interval gives it; with the paper's own D_E (β ≈ 0.018,
+/// end near 2.5·10⁴) it lies short of it.
 #[test]
 fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
     let judged = |d_earth: f64| {
@@ -607,10 +608,13 @@ fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
         after.split(' ').next().unwrap().parse().unwrap()
     };
     for (d_earth, side) in [
-        (2.0 * curves::D_EARTH_UM, "beyond it, as eq. 4's β predicts"),
+        (
+            2.0 * curves::D_EARTH_UM,
+            "beyond that range, as eq. 4's β predicts",
+        ),
         (
             curves::D_EARTH_UM,
-            "short of it, which eq. 4's β does not account for",
+            "short of that range, which eq. 4's β does not account for",
         ),
     ] {
         let c = judged(d_earth);

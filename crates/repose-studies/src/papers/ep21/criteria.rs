@@ -252,19 +252,27 @@ fn where_heaps_end(heaps: &SweepData, angle: &str) -> String {
     let Some(beta) = fit.as_ref().and_then(|f| f.param("beta")) else {
         return why + " (eq. 4 not fitted, so not carried onto our heaps)";
     };
-    let shift = (beta.value / BETA).powi(2);
-    let ours = paper_end / shift;
-    let verdict = if smallest >= ours {
-        "beyond it, as eq. 4's β predicts"
+    let shift = |b: f64| (b / BETA).powi(2);
+    let ours = paper_end / shift(beta.value);
+    // β's 95 % interval carried the same way: a larger β, an earlier end.
+    let (early, late) = (
+        paper_end / shift(beta.hi),
+        paper_end / shift(beta.lo.max(0.0)),
+    );
+    let verdict = if smallest > late {
+        "beyond that range, as eq. 4's β predicts"
+    } else if smallest >= early {
+        "inside that range, as eq. 4's β allows"
     } else {
-        "short of it, which eq. 4's β does not account for"
+        "short of that range, which eq. 4's β does not account for"
     };
     why + &format!(
         "; our eq. 4 β = {:.4} is {:.2}× the paper's, so our heaps stand at Bo as the \
-         paper's at {shift:.2}× that Bo, which carries the paper's end to Bo ≈ {ours:.2e} \
-         on ours: the heaps missing lie {verdict}",
+         paper's at {:.2}× that Bo, which carries the paper's end to Bo ≈ {ours:.2e} on \
+         ours ({early:.2e}–{late:.2e} over β's 95 % interval): the heaps missing lie {verdict}",
         beta.value,
-        beta.value / BETA
+        beta.value / BETA,
+        shift(beta.value)
     )
 }
 
