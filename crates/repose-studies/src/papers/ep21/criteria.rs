@@ -236,12 +236,15 @@ fn formed(p: &repose_store::Point) -> bool {
 /// at Bo·(β/0.014)², so the paper's last heaps fall at 4·10⁴/(β/0.014)²
 /// on our scale.
 fn where_heaps_end(heaps: &SweepData, angle: &str) -> String {
-    let finished = heaps.points.iter().filter(|p| formed(p) || p.failures > 0);
-    let (with, without): (Vec<_>, Vec<_>) = finished.partition(|p| formed(p));
-    let bonds = |of: &[&repose_store::Point]| of.iter().filter_map(|p| bond(&p.point)).collect();
-    let (with, without): (Vec<f64>, Vec<f64>) = (bonds(&with), bonds(&without));
-    let largest = with.iter().copied().reduce(f64::max);
-    let smallest = without.iter().copied().fold(f64::INFINITY, f64::min);
+    // The Bond numbers of the points with a heap, or of those that
+    // finished without one.
+    let bonds = |heap: bool| {
+        let finished = heaps.points.iter().filter(move |p| formed(p) == heap);
+        let finished = finished.filter(move |p| heap || p.failures > 0);
+        finished.filter_map(|p| bond(&p.point))
+    };
+    let largest = bonds(true).reduce(f64::max);
+    let smallest = bonds(false).fold(f64::INFINITY, f64::min);
     let paper_end = 4.0 * BOND_REGIME_I;
     let mut why = format!("the smallest Bo without a heap is {smallest:.2e}");
     if let Some(b) = largest {
