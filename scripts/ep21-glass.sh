@@ -1,9 +1,12 @@
 #!/bin/bash
-# The second paper's reproduction at glass's own modulus (63 GPa), in the
-# form whose glass-stiff heaps fit eq. 1: sliding and rolling limits on the
-# net normal force, the attraction fading with the overlap
-# (docs/model-3d.md). About 40 core-hours, estimated from the reduced glass
-# heaps' cost, so it runs on a store that outlives one run:
+# The second paper's reproduction, docs/reproduction-ep21.md: heaps and
+# columns at glass's own modulus (63 GPa), since no softening holds a
+# cohesive heap's angle (docs/model-3d.md), in the contact form whose
+# glass-stiff heaps fit eq. 1, the default (sliding and rolling limits on
+# the net normal force, the attraction fading with the overlap; named
+# below so that the run keeps its samples whatever the default). `paper`
+# and `standard` set the same numerics on these scenes. About 40
+# core-hours, so it runs on a store that outlives one run:
 #
 #   cargo build --release && scripts/ep21-glass.sh
 #
@@ -11,11 +14,12 @@
 # store; running the script again goes on from there. The cheap sweeps
 # (dry heaps, packed columns) run first and each sweep's samples cheapest
 # first (large grains, strong gravity), ahead of any sweep an earlier run
-# left queued, so that a run stopped early has finished the most points. While the reproduction is unfinished the store is kept in
-# the repository (a copy made by `repose backup` after the run stopped), so
-# that it goes on from its last checkpoints on the next machine. When it
-# finishes it writes docs/reproduction-ep21-glass.md; `scripts/ep21-glass.sh
-# --interim` writes it from the samples finished so far, running none.
+# left queued, so that a run stopped early has finished the most points.
+# While the reproduction is unfinished the store is kept in the repository
+# (a copy made by `repose backup` after the run stopped), so that it goes
+# on from its last checkpoints on the next machine. `scripts/ep21-glass.sh
+# --interim` writes the report from the samples finished so far, running
+# none, with an estimate of what is left.
 #
 # Environment: REPOSE (the program), STORE (the SQLite store); further
 # arguments go to `repose reproduce` (e.g. --workers 1, or --first
@@ -27,5 +31,5 @@ STORE=${STORE:-$PWD/data/ep21/glass-net-fading.db}
 mkdir -p "$(dirname "$STORE")"
 exec "$REPOSE" reproduce --paper ep21 --preset paper \
   --set material.limit_load=net --set material.contact_attraction=fading \
-  --database "sqlite://$STORE" --out docs/reproduction-ep21-glass.md \
+  --database "sqlite://$STORE" --out docs/reproduction-ep21.md \
   --checkpoint-every 300 --raise-priority 1 --order cheapest -q "$@"

@@ -461,9 +461,10 @@ fn serve_refuses_a_public_address_without_a_token() {
 
 #[test]
 fn a_rewritten_report_takes_the_presets_bias_from_the_study_beside_it() {
-    // The committed ep21 report, beside a speed/accuracy CSV whose
-    // `standard` heaps stand 10° ± 1.4° above glass's at a tenth of its
-    // particle-steps (and twice its wall time, as if run on a slower machine).
+    // The committed ep21 report (run at `paper`), beside a speed/accuracy
+    // CSV whose `paper` heaps stand 10° ± 1.4° above glass's at a tenth of
+    // its particle-steps (and twice its wall time, as if run on a slower
+    // machine).
     let dir = repose_testkit::scratch_dir("repose-rewrite");
     let json = dir.join("reproduction-ep21.json");
     std::fs::copy(workspace().join("docs/reproduction-ep21.json"), &json).unwrap();
@@ -474,8 +475,8 @@ fn a_rewritten_report_takes_the_presets_bias_from_the_study_beside_it() {
     };
     let csv = [
         "setting,group,seed,status,theta_r,theta_r_footprint,heap_grains,surface_roughness,youngs_modulus,wall_time_s,particle_steps,reason\n".to_string(),
-        row("standard", 1, 50.0, 20.0, 1000),
-        row("standard", 2, 52.0, 20.0, 1000),
+        row("paper", 1, 50.0, 20.0, 1000),
+        row("paper", 2, 52.0, 20.0, 1000),
         row("Y 63 GPa (glass)", 1, 40.0, 10.0, 10_000),
         row("Y 63 GPa (glass)", 2, 42.0, 10.0, 10_000),
     ]
@@ -486,7 +487,7 @@ fn a_rewritten_report_takes_the_presets_bias_from_the_study_beside_it() {
     let md = std::fs::read_to_string(dir.join("reproduction-ep21.md")).unwrap();
     assert!(
         md.contains(
-            "the `standard` preset stands +10.0° ± 1.4° from glass's 63 GPa at 0.10× its particle-steps"
+            "the `paper` preset stands +10.0° ± 1.4° from glass's 63 GPa at 0.10× its particle-steps"
         ),
         "{md}"
     );

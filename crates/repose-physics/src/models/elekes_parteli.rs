@@ -195,11 +195,12 @@ pub enum LimitLoad {
     /// The contact's repulsion `|F_n^c|` of eq. 10, as eqs. 11 and 15 print
     /// it (and LIGGGHTS's default): the attraction presses a cohesive contact
     /// harder and so raises both limits.
-    #[default]
     Contact,
     /// The net normal force, repulsion less attraction (never below zero):
     /// the attraction then holds contacts together without making them
-    /// rougher.
+    /// rougher. The default: with the fading attraction, the form whose
+    /// glass-stiff heaps fit the paper's eq. 1 (docs/model-3d.md).
+    #[default]
     Net,
     /// The size of the net normal force, `|F_n − F_vdW|`, damping included
     /// and not floored (LIGGGHTS 2.x–3.3.1, which adds the cohesive force
@@ -223,11 +224,12 @@ impl LimitLoad {
 #[serde(rename_all = "snake_case")]
 pub enum ContactAttraction {
     /// Its value at zero gap, whatever the overlap (eq. 13 as printed).
-    #[default]
     Constant,
     /// The Hamaker law continued into contact with the overlap as the
     /// distance, `A_H R_eff / (6 (δ + D_min)²)`: it falls as the grains
     /// press into each other, so stiff grains hold harder than soft ones.
+    /// The default, with net limits.
+    #[default]
     Fading,
 }
 
@@ -321,8 +323,8 @@ impl Default for Material {
             rolling: Rolling::Epsd2,
             cohesion: Cohesion::Vdw,
             tangential_cap: TangentialCap::Total,
-            limit_load: LimitLoad::Contact,
-            contact_attraction: ContactAttraction::Constant,
+            limit_load: LimitLoad::Net,
+            contact_attraction: ContactAttraction::Fading,
             rotation: true,
         }
     }

@@ -11,7 +11,9 @@
 //! taken relative to the reference's modulus, so that it maps each
 //! softened heap onto the reference's collisions. The presets resolve
 //! against glass's own modulus, as they do in a study, and their bias is
-//! read against the glass row.
+//! read against the glass row. Every row is in the default contact form
+//! (net limits, the attraction fading in contact) but the rows of the
+//! other forms, each run at the reference's modulus and at glass's.
 
 use super::tally::{costed, failure_lines, shift_chart, stats_over, Ran, Tally};
 use super::{
@@ -50,6 +52,24 @@ fn knob(name: &str, what: &str, settings: &[&str]) -> Case {
     Case::knob_over(&REFERENCE, name, what, settings)
 }
 
+/// The contact forms beside the default (limits on the net normal force,
+/// the attraction fading in contact): name, what it is, and its settings.
+const FORMS: [(&str, &str, &[&str]); 2] = [
+    (
+        "as printed",
+        "limits on the repulsion and the attraction constant in contact, as eqs. 11, 13 and 15 print them",
+        &[
+            "material.limit_load=contact",
+            "material.contact_attraction=constant",
+        ],
+    ),
+    (
+        "constant attraction",
+        "net limits with the attraction constant in contact",
+        &["material.contact_attraction=constant"],
+    ),
+];
+
 fn cases() -> Vec<Case> {
     let mut v = reference_and_presets("heap", "Y = 630 MPa, Verlet, dt = T_col/10", &REFERENCE);
     v.push(Case {
@@ -58,30 +78,15 @@ fn cases() -> Vec<Case> {
         what: "the quick preset with γ = 0: its bias on a dry heap (against `no cohesion`)".into(),
         overrides: vec!["preset=quick".into(), "material.surface_energy=0".into()],
     });
-    // The softened preset under the other forms of the limits and the
-    // attraction, against glass under the same form (`standard` is glass).
-    let forms: [(&str, &str, &[&str]); 2] = [
-        (
-            "net limits",
-            "with the limits on the net normal force",
-            &["material.limit_load=net"],
-        ),
-        (
-            "net limits, fading",
-            "with net limits and the attraction fading in contact",
-            &[
-                "material.limit_load=net",
-                "material.contact_attraction=fading",
-            ],
-        ),
-    ];
-    for (form, what, settings) in forms {
+    // The softened preset under the other contact forms, against glass
+    // under the same form (`standard` is glass).
+    for (form, what, settings) in FORMS {
         let mut overrides = vec!["preset=quick".to_string()];
         overrides.extend(settings.iter().map(|s| s.to_string()));
         v.push(Case {
             group: Group::Presets,
             name: format!("quick, {form}"),
-            what: format!("the quick preset {what} (against `{form}, glass`)"),
+            what: format!("the quick preset with {what} (against `{form}, glass`)"),
             overrides,
         });
     }
@@ -89,9 +94,26 @@ fn cases() -> Vec<Case> {
     v
 }
 
+/// Each contact form beside the default at the reference's modulus and at
+/// glass's.
+fn forms() -> Vec<Case> {
+    let mut v = Vec::new();
+    for (form, what, settings) in FORMS {
+        v.push(knob(form, what, settings));
+        let mut glass = vec!["material.youngs_modulus=6.3e10"];
+        glass.extend_from_slice(settings);
+        v.push(knob(
+            &format!("{form}, glass"),
+            &format!("Y = 63 GPa with {what}"),
+            &glass,
+        ));
+    }
+    v
+}
+
 /// The reference with one setting changed.
 fn knobs() -> Vec<Case> {
-    vec![
+    let mut v = vec![
         knob(
             "Y 63 GPa (glass)",
             "Y = 63 GPa, the paper's glass",
@@ -133,25 +155,9 @@ fn knobs() -> Vec<Case> {
                 "material.cohesion_scaling=sticking",
             ],
         ),
-        knob(
-            "net limits",
-            "sliding and rolling limits on the net normal force (attraction subtracted)",
-            &["material.limit_load=net"],
-        ),
-        knob(
-            "net limits, glass",
-            "Y = 63 GPa with the limits on the net normal force",
-            &["material.youngs_modulus=6.3e10", "material.limit_load=net"],
-        ),
-        knob(
-            "net limits, fading, glass",
-            "Y = 63 GPa, net limits and the Hamaker law continued into the overlap",
-            &[
-                "material.youngs_modulus=6.3e10",
-                "material.limit_load=net",
-                "material.contact_attraction=fading",
-            ],
-        ),
+    ];
+    v.extend(forms());
+    v.extend([
         knob("T_col/20", "dt = T_col/20", &["numerics.dt_factor=0.05"]),
         knob("T_col/5", "dt = T_col/5", &["numerics.dt_factor=0.2"]),
         knob(
@@ -169,7 +175,8 @@ fn knobs() -> Vec<Case> {
             "at rest below 10⁻⁷ m g d per grain",
             &["heap.rest_energy=1e-7"],
         ),
-    ]
+    ]);
+    v
 }
 
 /// One sample's numbers: a row of the per-sample CSV.
@@ -245,6 +252,7 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<HeapReport,
         config: config.clone(),
         elapsed: g.elapsed,
         fresh: g.fresh,
+        shared: g.shared,
         samples: g.samples,
     })
 }
@@ -256,6 +264,7 @@ pub struct HeapReport {
     config: Config,
     elapsed: f64,
     fresh: usize,
+    shared: usize,
     samples: Vec<Sample>,
 }
 
@@ -327,7 +336,14 @@ impl HeapReport {
         const MIXED: &str = "a row's wall time is that of the run that made it, perhaps on \
              another machine, so between rows of different runs compare particle-steps";
         let busy: f64 = self.samples.iter().map(|s| s.wall_time_s).sum();
-        match self.fresh {
+        let shared = match self.shared {
+            0 => String::new(),
+            n => format!(
+                "; {n} of them share their scene with another setting's run (the presets that \
+                 resolve to glass's own numerics), which ran once and counts for both"
+            ),
+        };
+        let made = match self.fresh {
             n if n == self.samples.len() => {
                 format!(" in {:.0} s ({busy:.0} s of run time)", self.elapsed)
             }
@@ -338,7 +354,8 @@ impl HeapReport {
                 " ({n} of them now, in {:.0} s; {busy:.0} s of run time in all; {MIXED})",
                 self.elapsed
             ),
-        }
+        };
+        made + &shared
     }
 
     fn markdown(&self, stem: &str) -> String {
@@ -349,6 +366,7 @@ impl HeapReport {
              Every setting pours 1 mm glass beads (γ = 0.05 J/m², Bond number 24) on Earth onto a 20 d plate until 1500 grains have fallen, over seeds {}–{}. \
              Glass's 63 GPa costs 10¹¹–10¹² particle-steps on the paper's heap; the knobs are turned on a hundredth of it, the reference's 630 MPa, and the `sticking` rescaling of γ is taken from there. \
              The presets take glass's 63 GPa as the true modulus, as in a study. \
+             Contacts take the default form — sliding and rolling limits on the net normal force, the attraction fading in contact — but in the rows named after another form. \
              A shift is the difference of two means with its standard error; beyond two standard errors a setting **shifts θ_r**.\n",
             self.config.seeds,
             self.samples.len(),
@@ -408,20 +426,23 @@ impl HeapReport {
         let _ = writeln!(
             s,
             "* **Stiffness moves a cohesive heap.** Against glass (63 GPa) the reference \
-             (630 MPa) stands {} steeper, 6.3 GPa {}; 63 MPa {} and 6.3 MPa {}. Softer \
-             grains press deeper into each contact under the constant attraction, so \
-             colliding grains stick where stiff ones bounce.",
+             (630 MPa) stands {}, 6.3 GPa {}; 63 MPa {} and 6.3 MPa {}. The attraction \
+             fades with the overlap, and softer grains press deeper into each contact, so \
+             they keep less of it; as printed, with the attraction constant in contact, \
+             softer grains keep all of it and stick where stiff ones bounce (the reference \
+             as printed stands {} against glass as printed).",
             self.shift("reference", g),
             self.shift("Y 6.3 GPa", g),
             self.shift("Y 63 MPa", g),
             self.shift("Y 6.3 MPa", g),
+            self.shift("as printed", "as printed, glass"),
         );
         let _ = writeln!(
             s,
             "* **Rescaling γ** by (Y/Y_ref)^{{2/5}} (`cohesion_scaling = \"sticking\"`) \
-             overcorrects: 63 MPa scaled sits {} from the reference, 6.3 MPa scaled {}, \
-             where unscaled they sit {} and {}. The presets therefore keep γ and bound \
-             the softening by the cohesion number instead (`kappa_cohesion`).",
+             moves 63 MPa by {} from the reference and 6.3 MPa by {}, where unscaled they \
+             sit {} and {}. The presets keep γ, and bound the softening by the cohesion \
+             number (`kappa_cohesion`).",
             self.shift("Y 63 MPa, γ scaled", "reference"),
             self.shift("Y 6.3 MPa, γ scaled", "reference"),
             self.shift("Y 63 MPa", "reference"),
@@ -431,44 +452,30 @@ impl HeapReport {
             s,
             "* **Presets, labelled by their bias.** On this cohesive heap (Bond number 24) \
              `quick` stands {} against glass, and on the dry heap {} against the reference \
-             stiffness. No softening holds a cohesive heap within a degree of glass (a \
-             tenth of its modulus stands {} steeper), so `standard` and `paper` keep \
-             glass's 63 GPa: they stand {} and {} from the glass row, at {} and {} of its \
-             particle-steps.",
+             stiffness. `standard` and `paper` keep glass's 63 GPa: they stand {} and {} \
+             from the glass row, at {} and {} of its particle-steps. A tenth of glass's \
+             modulus stands {} from glass at {} of its particle-steps, a hundredth (the \
+             reference) {} at {}.",
             self.shift("quick", g),
             self.shift("quick, no cohesion", "no cohesion"),
-            self.shift("Y 6.3 GPa", g),
             self.shift("standard", g),
             self.shift("paper", g),
             self.steps_ratio("standard", g),
             self.steps_ratio("paper", g),
+            self.shift("Y 6.3 GPa", g),
+            self.steps_ratio("Y 6.3 GPa", g),
+            self.shift("reference", g),
+            self.steps_ratio("reference", g),
         );
-        let _ = writeln!(
-            s,
-            "* **What the limits see.** Eqs. 11 and 15 bound sliding and rolling by the \
-             contact's repulsion, which the attraction raises: a resting cohesive contact \
-             carries π γ d more than its share of the weight, twelve weights here. Putting \
-             the limits on the net normal force (`limit_load = \"net\"`) moves the reference \
-             by {} and glass by {}, which then stands {} above the dry heap (630 MPa); against glass \
-             with net limits, `quick` with net limits stands {}.",
-            self.shift("net limits", "reference"),
-            self.shift("net limits, glass", g),
-            self.shift("net limits, glass", "no cohesion"),
-            self.shift("quick, net limits", "net limits, glass"),
-        );
-        let _ = writeln!(
-            s,
-            "* **The attraction fading in contact.** With the Hamaker law continued into the \
-             overlap (`contact_attraction = \"fading\"`) and net limits, glass stands {} \
-             against glass with net limits alone and {} above the dry heap (630 MPa); \
-             against it `quick` with the same form stands {}, and `quick` \
-             with it stands {} from `quick` without cohesion: softened grains pressed \
-             deeper keep little of the attraction.",
-            self.shift("net limits, fading, glass", "net limits, glass"),
-            self.shift("net limits, fading, glass", "no cohesion"),
-            self.shift("quick, net limits, fading", "net limits, fading, glass"),
-            self.shift("quick, net limits, fading", "quick, no cohesion"),
-        );
+        s.push_str(&self.reading_forms());
+        s.push_str(&self.reading_numerics());
+        s
+    }
+
+    /// The bullet on the time step, the settling threshold and the heap's
+    /// size.
+    fn reading_numerics(&self) -> String {
+        let mut s = String::new();
         let numerics = ["T_col/20", "T_col/5", "rest 1e-5", "rest 1e-7"];
         let moved: Vec<&str> = numerics
             .into_iter()
@@ -484,8 +491,8 @@ impl HeapReport {
         let _ = writeln!(
             s,
             "* **Numerics.** The time step moves θ_r by {} (T_col/20) and {} (T_col/5); the \
-             settling threshold by {} and {} ({verdict}). The heap's size moves it more: \
-             twice the grains stand {} against the reference.\n",
+             settling threshold by {} and {} ({verdict}); twice the grains poured stand {} \
+             against the reference.\n",
             self.shift("T_col/20", "reference"),
             self.shift("T_col/5", "reference"),
             self.shift("rest 1e-5", "reference"),
@@ -493,6 +500,29 @@ impl HeapReport {
             self.shift("3000 grains", "reference"),
         );
         s
+    }
+
+    /// The bullet on the contact forms: the default against the dry heap,
+    /// the other forms against it, and `quick` under each.
+    fn reading_forms(&self) -> String {
+        let g = "Y 63 GPa (glass)";
+        format!(
+            "* **The contact form.** In the default form (limits on the net normal force, \
+             the attraction fading in contact) glass stands {} above the dry heap \
+             (630 MPa). As eqs. 11, 13 and 15 print it — limits on the repulsion, which the \
+             attraction raises by π γ d, twelve weights here, and the attraction constant in \
+             contact — glass stands {} against the default; with net limits and a constant \
+             attraction {}. `quick` stands {} against glass in the default form, {} as \
+             printed and {} with a constant attraction, each against glass in its own form; \
+             in the default form it stands {} from `quick` without cohesion.\n",
+            self.shift(g, "no cohesion"),
+            self.shift("as printed, glass", g),
+            self.shift("constant attraction, glass", g),
+            self.shift("quick", g),
+            self.shift("quick, as printed", "as printed, glass"),
+            self.shift("quick, constant attraction", "constant attraction, glass"),
+            self.shift("quick", "quick, no cohesion"),
+        )
     }
 
     fn failures(&self) -> String {

@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use repose_physics::measure::Stats;
 use repose_physics::{registry, Preset, Scene, SceneError, ENGINE};
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use tally::{costed, failure_lines, shift_chart, stats_over, Costed, Ran, Tally};
@@ -384,6 +385,8 @@ pub(crate) struct Gathered<S, M> {
     pub summaries: Vec<Option<M>>,
     /// How many samples ran now (the rest were kept from the CSV).
     pub fresh: usize,
+    /// How many of those are another setting's run of the same scene.
+    pub shared: usize,
     pub elapsed: f64,
 }
 
@@ -410,7 +413,19 @@ pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
             .iter()
             .any(|s| (s.setting(), s.seed()) == (all[*k].name.as_str(), sc.seed))
     });
+    let twins = twins(&mut jobs);
     let (mut samples, elapsed) = run_jobs(config, &mut jobs, tick, |k, scene| one(&all[k], scene))?;
+    let copies: Vec<S> = twins
+        .iter()
+        .filter_map(|(k, seed, of)| {
+            let ran = samples
+                .iter()
+                .find(|s| s.setting() == all[*of].name && s.seed() == *seed)?;
+            Some(ran.renamed(&all[*k]))
+        })
+        .collect();
+    let shared = copies.len();
+    samples.extend(copies);
     let fresh = samples.len();
     samples.extend(kept);
     let index = |s: &S| all.iter().position(|c| c.name == s.setting()).unwrap_or(0);
@@ -426,8 +441,47 @@ pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
         samples,
         summaries,
         fresh,
+        shared,
         elapsed,
     })
+}
+
+/// Takes out of `jobs` every scene that an earlier job runs too (two
+/// settings that resolve to one scene, as presets that set the same
+/// numerics, or a knob that sets a default): each scene runs once, and the
+/// twin's sample is the first one's filed under its own setting. Returns
+/// the twins as (setting, seed, setting that runs it).
+fn twins(jobs: &mut Vec<(usize, Scene)>) -> Vec<(usize, u64, usize)> {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    let mut twins = Vec::new();
+    jobs.retain(|(k, scene)| {
+        let key = numbers_of(scene);
+        match seen.iter().find(|(s, _)| *s == key) {
+            Some((_, of)) => {
+                twins.push((*k, scene.seed, *of));
+                false
+            }
+            None => {
+                seen.push((key, *k));
+                true
+            }
+        }
+    });
+    twins
+}
+
+/// What decides a resolved scene's numbers, as text: the scene without
+/// the name of the preset that filled it in (its settings are in the
+/// scene) and without the thread count.
+fn numbers_of(scene: &Scene) -> String {
+    let mut v = serde_json::to_value(scene).unwrap_or_default();
+    if let Some(scene) = v.as_object_mut() {
+        scene.remove("preset");
+        if let Some(n) = scene.get_mut("numerics").and_then(Value::as_object_mut) {
+            n.remove("threads");
+        }
+    }
+    v.to_string()
 }
 
 /// The samples of an earlier run's CSV for settings and seeds still
@@ -534,6 +588,7 @@ pub fn run(config: &Config, tick: &(dyn Fn(usize) + Sync)) -> Result<Report, Tra
         summaries,
         fresh,
         elapsed,
+        ..
     } = gather(config, &all, BASE, tick, run_one, summarise)?;
     let base = Scene::from_toml(BASE, &config.set)
         .map_err(|error| TradeoffError::Scene {
@@ -1053,5 +1108,57 @@ impl Report {
     /// A table of every setting's cost and shifts, for the terminal.
     pub fn summary(&self) -> String {
         self.console()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_that_resolve_to_one_scene_run_it_once() {
+        let config = Config {
+            seeds: 2,
+            seed_base: 1,
+            threads: 1,
+            out: PathBuf::from("unused.md"),
+            set: Vec::new(),
+            only: Vec::new(),
+            resume: false,
+        };
+        // `b` sets the width `a` sets; `c` another; `d` sets `a`'s width and
+        // a seed, which the plan's own seed overrides.
+        let all = [
+            Case::new(Group::Knobs, "a", "", &["box.width=1.2"]),
+            Case::new(Group::Knobs, "b", "", &["box.width=1.2"]),
+            Case::new(Group::Knobs, "c", "", &["box.width=1.5"]),
+            Case::new(Group::Knobs, "d", "", &["box.width=1.2", "seed=9"]),
+        ];
+        let mut jobs = plan(&config, &all, BASE).unwrap();
+        assert_eq!(jobs.len(), 8);
+        let twins = twins(&mut jobs);
+        // So `b` and `d` are `a`'s scenes; `c` runs on its own.
+        assert_eq!(twins, [(1, 1, 0), (1, 2, 0), (3, 1, 0), (3, 2, 0)]);
+        let left: Vec<(usize, u64)> = jobs.iter().map(|(k, s)| (*k, s.seed)).collect();
+        assert_eq!(left, [(0, 1), (0, 2), (2, 1), (2, 2)]);
+
+        // On a heap `standard` and `paper` set the same numerics, and the
+        // thread count changes no number: one scene. `quick` softens.
+        let heap = "protocol = \"heap\"\n[material]\nsurface_energy = 0.05\n";
+        let all = [
+            Case::new(Group::Presets, "standard", "", &["preset=standard"]),
+            Case::new(Group::Presets, "paper", "", &["preset=paper"]),
+            Case::new(
+                Group::Presets,
+                "paper, 2 threads",
+                "",
+                &["preset=paper", "numerics.threads=2"],
+            ),
+            Case::new(Group::Presets, "quick", "", &["preset=quick"]),
+        ];
+        let mut jobs = plan(&config, &all, heap).unwrap();
+        let found = super::twins(&mut jobs);
+        assert_eq!(found, [(1, 1, 0), (1, 2, 0), (2, 1, 0), (2, 2, 0)]);
+        assert_eq!(jobs.len(), 4);
     }
 }

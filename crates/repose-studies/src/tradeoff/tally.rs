@@ -51,6 +51,9 @@ pub(crate) trait Costed {
     fn reason(&self) -> &str;
     fn wall_time(&self) -> f64;
     fn particle_steps(&self) -> u64;
+    /// The same sample filed under another setting (one whose scene is
+    /// this one's).
+    fn renamed(&self, case: &Case) -> Self;
 }
 
 /// Implements [`Costed`] for a per-sample row with the fields `setting`,
@@ -76,6 +79,13 @@ macro_rules! costed {
             }
             fn particle_steps(&self) -> u64 {
                 self.particle_steps
+            }
+            fn renamed(&self, case: &$crate::tradeoff::Case) -> Self {
+                Self {
+                    setting: case.name.clone(),
+                    group: case.group,
+                    ..self.clone()
+                }
             }
         }
     };

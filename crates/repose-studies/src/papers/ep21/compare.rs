@@ -19,7 +19,7 @@ use repose_store::Aggregate;
 /// softening on top; in the form whose glass-stiff heaps meet eq. 1, the
 /// dry heaps' level.
 const HEAPS_DIFFER: &str =
-    "the paper's value lies outside our 95 % interval. Measured causes, by the contact form the run used: as printed (the default), the contacts hold cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and a softened preset raises them further (its bias under Cost); with the limits on the net normal force and the attraction fading in contact (material.limit_load = net, material.contact_attraction = fading), glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv), and what is left over is the dry heaps' level above the paper's 24° (the θ_r,nc row)";
+    "the paper's value lies outside our 95 % interval. Measured causes, by the contact form the run used: as printed (material.limit_load = contact, material.contact_attraction = constant), the contacts hold cohesive heaps too steep even at glass's 63 GPa (the 1 mm heap on Earth at 41.9° on this heap against eq. 1's 25.9°; docs/model-3d.md, data/glass/caps-1mm.csv), and a softened preset raises them further (its bias under Cost); in the default form, with the limits on the net normal force and the attraction fading in contact, glass-stiff heaps of 1 mm to 100 µm on the reduced plate fit eq. 1 with μ_∞ = 0.510 ± 0.009 and D_E = 97 ± 5 µm (data/glass/reduced-net-fading-*.csv and caps-100um.csv), and what is left over is the dry heaps' level above the paper's 24° (the θ_r,nc row)";
 
 /// Why the packings' constants differ, as measured on glass-stiff
 /// columns: the column's height, softening, and the forms that fade the
@@ -262,7 +262,7 @@ fn rise_sign_row(rise: Option<Aggregate>) -> Comparison {
              with √(d/g) and √(g d) throughout, so a dry heap sees g only through its grains' \
              stiffness against their weight, κ = Y/(ρ g d), and the speed of its collisions; \
              measured at two stiffnesses, glass's 63 GPa and the softened grains of \
-             docs/reproduction-ep21.md (a rise of −0.2 % ± 1.1 %), the dry angle stays \
+             docs/reproduction-ep21-printed.md (a rise of −0.2 % ± 1.1 %), the dry angle stays \
              flat, so the paper's rise is no effect of stiffness in this model",
             sigma.map_or("no result".into(), |s| format!("{s:+.1}σ from none"))
         )

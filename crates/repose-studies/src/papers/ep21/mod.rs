@@ -19,14 +19,14 @@
 //! with 1200 grains a dry heap keeps under a hundred grains and stands at
 //! 16°, where the 20 d plate keeps 660 and stands at 25°.
 //!
-//! Sliding and rolling are bounded by the contact's repulsion, as eqs. 11
-//! and 15 print them. Bounding them by the net normal force instead
-//! (`material.limit_load = "net"`) brings a glass-stiff 1 mm heap from 42°
-//! to 31° (the paper: 26°), but in the `standard` reproduction it leaves
-//! the small heaps towers and takes most of the cohesive loosening out of
-//! the packings (C = 0.16 against the paper's 0.56 on 40 d columns, where
-//! the form as printed gave 0.46 and gives 0.55 on the paper's 100 d); see
-//! `docs/model-3d.md`.
+//! Sliding and rolling are bounded by the net normal force and the
+//! attraction fades with the overlap in contact (the model's default form):
+//! glass-stiff heaps of 1 mm to 100 µm then fit eq. 1 with the paper's D_E
+//! inside our interval, where the form as printed (limits on the
+//! repulsion, the attraction constant in contact) holds a glass-stiff 1 mm
+//! heap at 42° against the paper's 26°. The default form packs glass-stiff
+//! columns denser than the paper's (φ_∞ = 0.585 against 0.57), which the
+//! form as printed matches; see `docs/model-3d.md`.
 
 pub mod compare;
 mod criteria;
