@@ -36,9 +36,13 @@ fn parts(material: &[&str]) -> (Parts, Parts) {
     scene_parts(&o)
 }
 
-/// A one-grain scene with the given overrides.
+/// A one-grain scene with the given overrides, in the contact form as the
+/// paper prints it (limits on the repulsion, the attraction constant in
+/// contact), for which the closed forms below are written; a test of
+/// another form says so in its overrides.
 fn scene(overrides: &[&str]) -> Scene {
     let base = "protocol = \"free_run\"\ndimension = 3\nduration = 1.0\n\
+                [material]\nlimit_load = \"contact\"\ncontact_attraction = \"constant\"\n\
                 [[particles]]\nposition = [0.0, 0.0, 0.0]\nradius = 0.0005\n";
     let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     Scene::from_toml(base, &o).unwrap()
