@@ -1,7 +1,8 @@
 #!/bin/bash
 # The second paper's reproduction, docs/reproduction-ep21.md: heaps and
-# columns at glass's own modulus (63 GPa), since no softening holds a
-# cohesive heap's angle (docs/model-3d.md), in the contact form whose
+# columns at glass's own modulus (63 GPa), since no softening has yet been
+# shown to hold a cohesive heap's angle at every gravity level of the
+# study (docs/model-3d.md), in the contact form whose
 # glass-stiff heaps fit eq. 1, the default (sliding and rolling limits on
 # the net normal force, the attraction fading with the overlap; named
 # below so that the run keeps its samples whatever the default). `paper`

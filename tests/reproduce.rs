@@ -213,8 +213,9 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
     let out = scratch("report").with_file_name("reproduction-ep21.md");
     let run = reduced_ep21("2")
         .args(["--server", &server.url])
-        // A variant of the model: the limits on the repulsion, as printed.
-        .args(["--set", "material.limit_load=contact"])
+        // A variant of the model: the limits on the size of the net force,
+        // as LIGGGHTS 3.3 reads it (the reduced heaps' base sets `contact`).
+        .args(["--set", "material.limit_load=liggghts"])
         .arg("--out")
         .arg(&out)
         .output()
@@ -239,12 +240,12 @@ async fn a_reduced_reproduction_of_the_second_paper_reports_the_stored_aggregate
     }
     let sweeps = numbers["sweeps"].as_array().unwrap();
     assert_eq!(sweeps.len(), 3);
-    assert_eq!(numbers["variant"], r#"material.limit_load = "contact""#);
-    assert!(markdown.contains(r#"a variant of the model: material.limit_load = "contact""#));
+    assert_eq!(numbers["variant"], r#"material.limit_load = "liggghts""#);
+    assert!(markdown.contains(r#"a variant of the model: material.limit_load = "liggghts""#));
     for sweep in sweeps {
         let id = sweep["id"].as_str().unwrap();
         let stored = get(&format!("{}/api/sweeps/{id}", server.url)).await;
-        assert_eq!(stored["spec"]["base"]["material"]["limit_load"], "contact");
+        assert_eq!(stored["spec"]["base"]["material"]["limit_load"], "liggghts");
     }
     let metrics = ["theta_r", "surface_roughness", "packing_fraction"];
     let checked = points_match_samples(&server, sweeps, &markdown, &metrics).await;

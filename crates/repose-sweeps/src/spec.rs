@@ -425,18 +425,23 @@ fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
     err
 }
 
-/// SHA-256 of the canonical JSON of a resolved scene (keys sorted) and the
-/// engine version: the identity of a sample.
-pub fn sample_hash(scene: &Scene) -> String {
+/// A resolved scene as JSON (keys sorted) without its thread count:
+/// threads change the speed of a sample, never its numbers.
+pub fn canonical(scene: &Scene) -> Value {
     let mut canonical = serde_json::to_value(scene).unwrap_or(Value::Null);
-    // Threads change the speed of a sample, never its numbers.
     if let Some(numerics) = canonical.get_mut("numerics").and_then(Value::as_object_mut) {
         numerics.remove("threads");
     }
+    canonical
+}
+
+/// SHA-256 of the [`canonical`] JSON of a resolved scene and the engine
+/// version: the identity of a sample.
+pub fn sample_hash(scene: &Scene) -> String {
     let mut h = Sha256::new();
     h.update(ENGINE.as_bytes());
     h.update([0u8]);
-    h.update(canonical.to_string().as_bytes());
+    h.update(canonical(scene).to_string().as_bytes());
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 

@@ -48,6 +48,9 @@ const REFERENCE: [&str; 4] = [
     "numerics.dt_factor=0.1",
 ];
 
+/// The row of glass's own modulus, which the presets' bias is read against.
+const GLASS: &str = "Y 63 GPa (glass)";
+
 fn knob(name: &str, what: &str, settings: &[&str]) -> Case {
     Case::knob_over(&REFERENCE, name, what, settings)
 }
@@ -115,7 +118,7 @@ fn forms() -> Vec<Case> {
 fn knobs() -> Vec<Case> {
     let mut v = vec![
         knob(
-            "Y 63 GPa (glass)",
+            GLASS,
             "Y = 63 GPa, the paper's glass",
             &["material.youngs_modulus=6.3e10"],
         ),
@@ -417,7 +420,7 @@ impl HeapReport {
 
     /// What the tables say, in numbers taken from them.
     fn reading(&self) -> String {
-        let g = "Y 63 GPa (glass)";
+        let g = GLASS;
         let mut s = String::from(
             "## Reading the tables
 
@@ -505,7 +508,7 @@ impl HeapReport {
     /// The bullet on the contact forms: the default against the dry heap,
     /// the other forms against it, and `quick` under each.
     fn reading_forms(&self) -> String {
-        let g = "Y 63 GPa (glass)";
+        let g = GLASS;
         format!(
             "* **The contact form.** In the default form (limits on the net normal force, \
              the attraction fading in contact) glass stands {} above the dry heap \
@@ -575,7 +578,7 @@ pub fn preset_bias(csv: &Path, preset: &str) -> Option<String> {
     let stats = |setting: &str, f: fn(&Sample) -> Option<f64>| {
         super::setting_stats(&rows, |s| s.setting == setting, f)
     };
-    let glass = "Y 63 GPa (glass)";
+    let glass = GLASS;
     let cohesive = Shift::between(stats(preset, |s| s.theta_r), stats(glass, |s| s.theta_r))?;
     let steps = |setting: &str| stats(setting, |s| Some(s.particle_steps as f64));
     let cost = steps(preset)?.mean / steps(glass)?.mean;

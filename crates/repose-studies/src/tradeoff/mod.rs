@@ -17,7 +17,6 @@ use rayon::prelude::*;
 use repose_physics::measure::Stats;
 use repose_physics::{registry, Preset, Scene, SceneError, ENGINE};
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use tally::{costed, failure_lines, shift_chart, stats_over, Costed, Ran, Tally};
@@ -470,16 +469,13 @@ fn twins(jobs: &mut Vec<(usize, Scene)>) -> Vec<(usize, u64, usize)> {
     twins
 }
 
-/// What decides a resolved scene's numbers, as text: the scene without
-/// the name of the preset that filled it in (its settings are in the
-/// scene) and without the thread count.
+/// What decides a resolved scene's numbers, as text: its canonical form
+/// (the sample's identity, which leaves out the thread count) without the
+/// name of the preset that filled it in, whose settings are in the scene.
 fn numbers_of(scene: &Scene) -> String {
-    let mut v = serde_json::to_value(scene).unwrap_or_default();
+    let mut v = repose_sweeps::spec::canonical(scene);
     if let Some(scene) = v.as_object_mut() {
         scene.remove("preset");
-        if let Some(n) = scene.get_mut("numerics").and_then(Value::as_object_mut) {
-            n.remove("threads");
-        }
     }
     v.to_string()
 }
@@ -1136,9 +1132,9 @@ mod tests {
         ];
         let mut jobs = plan(&config, &all, BASE).unwrap();
         assert_eq!(jobs.len(), 8);
-        let twins = twins(&mut jobs);
+        let found = twins(&mut jobs);
         // So `b` and `d` are `a`'s scenes; `c` runs on its own.
-        assert_eq!(twins, [(1, 1, 0), (1, 2, 0), (3, 1, 0), (3, 2, 0)]);
+        assert_eq!(found, [(1, 1, 0), (1, 2, 0), (3, 1, 0), (3, 2, 0)]);
         let left: Vec<(usize, u64)> = jobs.iter().map(|(k, s)| (*k, s.seed)).collect();
         assert_eq!(left, [(0, 1), (0, 2), (2, 1), (2, 2)]);
 
@@ -1157,7 +1153,7 @@ mod tests {
             Case::new(Group::Presets, "quick", "", &["preset=quick"]),
         ];
         let mut jobs = plan(&config, &all, heap).unwrap();
-        let found = super::twins(&mut jobs);
+        let found = twins(&mut jobs);
         assert_eq!(found, [(1, 1, 0), (1, 2, 0), (2, 1, 0), (2, 2, 0)]);
         assert_eq!(jobs.len(), 4);
     }
