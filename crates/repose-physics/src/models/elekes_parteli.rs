@@ -261,9 +261,15 @@ pub const GLASS_MODULUS: f64 = 63e9;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Material {
-    /// Young's modulus `Y`, Pa; the true modulus unless `kappa` or
-    /// `kappa_cohesion` soften it.
+    /// Young's modulus `Y`, Pa; the true modulus unless `modulus_fraction`,
+    /// `kappa` or `kappa_cohesion` soften it.
     pub youngs_modulus: Option<f64>,
+    /// Softening by a fixed fraction of the true modulus: where
+    /// `youngs_modulus` is not given, `Y = fraction × true_modulus`, the same
+    /// at every grain size and gravity. (Left out of the written scene when
+    /// unset, so scenes without it keep their sample hashes.)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modulus_fraction: Option<f64>,
     /// Softening by the stiffness number `κ = Y/(ρ g d)`: where
     /// `youngs_modulus` is not given, `Y = κ ρ g d`. Two scenes with the
     /// same `κ` (and no cohesion) are one scene on another clock.
@@ -307,6 +313,7 @@ impl Default for Material {
     fn default() -> Self {
         Material {
             youngs_modulus: None,
+            modulus_fraction: None,
             kappa: None,
             kappa_cohesion: None,
             cohesion_scaling: CohesionScaling::None,
@@ -338,6 +345,15 @@ impl Section for Material {
     fn check(&self, scene: &Scene, c: &mut Checks) {
         if let Some(y) = self.youngs_modulus {
             c.positive("material.youngs_modulus", y);
+        }
+        if let Some(f) = self.modulus_fraction {
+            c.positive("material.modulus_fraction", f);
+            if f > 1.0 {
+                c.fail(
+                    "material.modulus_fraction",
+                    "must not exceed 1 (the true modulus)",
+                );
+            }
         }
         if let Some(k) = self.kappa {
             c.positive("material.kappa", k);
@@ -395,9 +411,9 @@ impl Material {
         }
     }
 
-    /// The modulus simulated: the given one; or softened to the larger of
-    /// `κ ρ g d` and `κ_c π γ / d` (those set), never stiffer than the true
-    /// modulus; or the true modulus.
+    /// The modulus simulated: the given one; or softened to the largest of
+    /// `fraction × Y_true`, `κ ρ g d` and `κ_c π γ / d` (those set), never
+    /// stiffer than the true modulus; or the true modulus.
     pub fn modulus(&self, grains: &Grains, g: f64) -> f64 {
         if let Some(y) = self.youngs_modulus {
             return y;
@@ -407,7 +423,8 @@ impl Material {
         let cohesion = self
             .kappa_cohesion
             .map(|k| k * std::f64::consts::PI * self.surface_energy / d);
-        match [gravity, cohesion]
+        let fraction = self.modulus_fraction.map(|f| f * self.true_modulus);
+        match [fraction, gravity, cohesion]
             .into_iter()
             .flatten()
             .filter(|y| *y > 0.0)
@@ -428,6 +445,7 @@ impl Material {
         };
         Material {
             youngs_modulus: Some(y),
+            modulus_fraction: None,
             kappa: None,
             kappa_cohesion: None,
             cohesion_scaling: CohesionScaling::None,
@@ -820,5 +838,73 @@ impl Model for ElekesParteli {
             ),
             ("rotation".to_string(), m.rotation.to_string()),
         ])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Grains, Material, GLASS_MODULUS};
+    use crate::scene::Scene;
+
+    fn grains(d: f64) -> Grains {
+        Grains {
+            diameter: d,
+            ..Grains::default()
+        }
+    }
+
+    #[test]
+    fn a_fraction_of_the_true_modulus_softens_every_size_and_gravity_alike() {
+        let m = Material {
+            modulus_fraction: Some(0.1),
+            ..Material::default()
+        };
+        for d in [1e-4, 1e-3] {
+            for g in [1.61865, 9.81, 98.1] {
+                assert_eq!(m.modulus(&grains(d), g), 0.1 * GLASS_MODULUS, "{d} {g}");
+            }
+        }
+        // A given modulus wins; the largest of the softenings set holds.
+        let given = Material {
+            youngs_modulus: Some(1e8),
+            ..m.clone()
+        };
+        assert_eq!(given.modulus(&grains(1e-3), 9.81), 1e8);
+        let stiffer = Material {
+            kappa: Some(1e9),
+            ..m.clone()
+        };
+        let by_kappa = 1e9 * 2500.0 * 9.81 * 1e-3;
+        assert!(by_kappa > 0.1 * GLASS_MODULUS);
+        assert_eq!(stiffer.modulus(&grains(1e-3), 9.81), by_kappa);
+        // The softened material as simulated carries the modulus alone.
+        let simulated = m.effective(&grains(1e-3), 9.81);
+        assert_eq!(simulated.youngs_modulus, Some(0.1 * GLASS_MODULUS));
+        assert_eq!(simulated.modulus_fraction, None);
+    }
+
+    #[test]
+    fn a_fraction_outside_zero_to_one_is_refused_by_name() {
+        for bad in ["0", "-0.1", "1.5"] {
+            let err = Scene::from_toml(
+                "protocol = \"heap\"",
+                &[format!("material.modulus_fraction={bad}")],
+            )
+            .unwrap_err();
+            let fields: Vec<&str> = err.errors.iter().map(|e| e.field.as_str()).collect();
+            assert_eq!(fields, ["material.modulus_fraction"], "{bad}: {err}");
+        }
+        assert!(Scene::from_toml(
+            "protocol = \"heap\"",
+            &["material.modulus_fraction=1".into()]
+        )
+        .is_ok());
+    }
+
+    #[test]
+    fn a_scene_without_a_fraction_writes_none() {
+        let v = serde_json::to_value(Material::default()).unwrap();
+        assert!(v.get("modulus_fraction").is_none(), "{v}");
+        assert!(v.get("kappa").is_some(), "{v}");
     }
 }

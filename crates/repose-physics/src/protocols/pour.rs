@@ -543,17 +543,15 @@ pub fn check_scene(scene: &Scene, c: &mut Checks) {
 /// The settings the fidelity presets give the 3D protocols. `quick`
 /// softens the modulus by its stiffness number `κ = Y/(ρ g d)`, kept stiff
 /// enough for cohesion by `κ_c = Y d/(π γ)` (where the scene gives no
-/// modulus); `standard` and `paper` keep the true modulus (glass's 63 GPa).
-/// No softening holds a cohesive heap's angle: a tenth of glass's modulus
-/// already stands 2–3° steeper, and no rule of this contact model keeps
-/// both the holding and the sticking of softened grains
-/// (`docs/model-3d.md`, "Softening, and its limits"), so the working preset
-/// is glass-stiff and `quick` is labelled by its bias
-/// (`docs/tradeoff-heap.md`). `quick` also bounds the kick of the contact
-/// attraction per step to half of `√(g d)`: at its softness fine grains
-/// were otherwise heated by it until they flew off the plate
-/// (`docs/model-3d.md`, "The attraction's kick"); glass-stiff steps stay
-/// below that bound at the study's sizes.
+/// modulus); `standard` and `paper` keep the true modulus (glass's 63 GPa),
+/// which the heap's `standard` softens to a tenth (`heap::preset`).
+/// Softer grains stick where glass bounces and pack measurably looser, so
+/// the softer `quick` is labelled by its bias (`docs/tradeoff-heap.md`,
+/// `docs/model-3d.md`, "Softening, and its limits"). `quick` also bounds
+/// the kick of the contact attraction per step to half of `√(g d)`: at its
+/// softness fine grains were otherwise heated by it until they flew off the
+/// plate (`docs/model-3d.md`, "The attraction's kick"); glass-stiff steps
+/// stay below that bound at the study's sizes.
 pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
     match preset {
         Preset::Quick => vec![

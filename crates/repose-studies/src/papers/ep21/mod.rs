@@ -5,10 +5,12 @@
 //! cohesion over g (fig. 3B) and packed columns (fig. 5), with the paper's
 //! fits made again on our data.
 //!
-//! Two samples a point. Heaps and columns take the pour's presets, whose
-//! `standard` is glass's own modulus: softened grains stick where glass
-//! bounces and pack measurably looser (`protocols::pour::preset`), so a
-//! `standard` reproduction costs some 40 core-hours. The columns are
+//! Two samples a point. Heaps and columns take their protocols' presets:
+//! `standard` pours heaps at a tenth of glass's modulus, which holds their
+//! angle within 1° (`protocols::heap::preset`), and packs columns at
+//! glass's own, since softened columns pack measurably looser; a `standard`
+//! reproduction costs some 19 core-hours, a `paper` one (glass throughout)
+//! some 40. The columns are
 //! narrower than the paper's (8 d against 17 d, periodic) but as tall
 //! (100 d), since a cohesive bed released from lower packs looser.
 //!
