@@ -44,8 +44,9 @@ pub struct TradeoffArgs {
     #[arg(long, value_delimiter = ',')]
     only: Vec<Group>,
     /// Keep the samples already in the CSV beside --out (same setting
-    /// name and seed) and run only the missing ones, e.g. after an
-    /// interruption or after changing one setting (delete its rows first).
+    /// name and seed, and the same scene as the setting now makes) and run
+    /// only the others, e.g. after an interruption or after changing one
+    /// setting (its rows run again).
     #[arg(long)]
     resume: bool,
     /// No progress bar.

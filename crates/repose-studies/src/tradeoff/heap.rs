@@ -216,6 +216,9 @@ struct Sample {
     wall_time_s: f64,
     particle_steps: u64,
     reason: String,
+    /// The identity of the scene that ran (empty in older CSVs).
+    #[serde(default)]
+    scene: String,
 }
 
 costed!(Sample);
@@ -240,6 +243,7 @@ fn run_one(case: &Case, scene: &Scene) -> Sample {
         particle_steps: ran.particle_steps,
         status: ran.status,
         reason: ran.reason,
+        scene: repose_sweeps::spec::sample_hash(scene),
     }
 }
 

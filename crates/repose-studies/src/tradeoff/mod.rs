@@ -16,6 +16,7 @@ use crate::chart::Chart;
 use rayon::prelude::*;
 use repose_physics::measure::Stats;
 use repose_physics::{registry, Preset, Scene, SceneError, ENGINE};
+use repose_sweeps::spec::sample_hash;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -270,6 +271,9 @@ struct Sample {
     wall_time_s: f64,
     particle_steps: u64,
     reason: String,
+    /// The identity of the scene that ran (empty in older CSVs).
+    #[serde(default)]
+    scene: String,
 }
 
 costed!(Sample);
@@ -288,6 +292,7 @@ fn run_one(case: &Case, scene: &Scene) -> Sample {
         particle_steps: ran.particle_steps,
         status: ran.status,
         reason: ran.reason,
+        scene: sample_hash(scene),
     }
 }
 
@@ -416,11 +421,11 @@ pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
     let (mut samples, elapsed) = run_jobs(config, &mut jobs, tick, |k, scene| one(&all[k], scene))?;
     let copies: Vec<S> = twins
         .iter()
-        .filter_map(|(k, seed, of)| {
+        .filter_map(|(k, seed, of, scene)| {
             let ran = samples
                 .iter()
                 .find(|s| s.setting() == all[*of].name && s.seed() == *seed)?;
-            Some(ran.renamed(&all[*k]))
+            Some(ran.renamed(&all[*k], scene))
         })
         .collect();
     let shared = copies.len();
@@ -449,15 +454,16 @@ pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
 /// settings that resolve to one scene, as presets that set the same
 /// numerics, or a knob that sets a default): each scene runs once, and the
 /// twin's sample is the first one's filed under its own setting. Returns
-/// the twins as (setting, seed, setting that runs it).
-fn twins(jobs: &mut Vec<(usize, Scene)>) -> Vec<(usize, u64, usize)> {
+/// the twins as (setting, seed, setting that runs it, the twin's own scene
+/// identity).
+fn twins(jobs: &mut Vec<(usize, Scene)>) -> Vec<(usize, u64, usize, String)> {
     let mut seen: Vec<(String, usize)> = Vec::new();
     let mut twins = Vec::new();
     jobs.retain(|(k, scene)| {
         let key = numbers_of(scene);
         match seen.iter().find(|(s, _)| *s == key) {
             Some((_, of)) => {
-                twins.push((*k, scene.seed, *of));
+                twins.push((*k, scene.seed, *of, sample_hash(scene)));
                 false
             }
             None => {
@@ -481,7 +487,10 @@ fn numbers_of(scene: &Scene) -> String {
 }
 
 /// The samples of an earlier run's CSV for settings and seeds still
-/// planned.
+/// planned whose setting still resolves to the scene that made them (a
+/// setting changed since runs again). A row written before rows carried
+/// their scene is taken to be its planned scene's, and carries it from now
+/// on.
 pub(crate) fn kept<S: Costed + serde::de::DeserializeOwned>(
     csv: &Path,
     names: &[String],
@@ -493,10 +502,16 @@ pub(crate) fn kept<S: Costed + serde::de::DeserializeOwned>(
     reader
         .deserialize::<S>()
         .filter_map(Result::ok)
-        .filter(|s| {
-            let (setting, seed) = (s.setting(), s.seed());
-            jobs.iter()
-                .any(|(k, sc)| names[*k] == setting && sc.seed == seed)
+        .filter_map(|s| {
+            let (_, planned) = jobs
+                .iter()
+                .find(|(k, sc)| names[*k] == s.setting() && sc.seed == s.seed())?;
+            let hash = sample_hash(planned);
+            match s.scene() {
+                "" => Some(s.with_scene(hash)),
+                made if made == hash => Some(s),
+                _ => None,
+            }
         })
         .collect()
 }
@@ -1111,17 +1126,73 @@ impl Report {
 mod tests {
     use super::*;
 
-    #[test]
-    fn settings_that_resolve_to_one_scene_run_it_once() {
-        let config = Config {
-            seeds: 2,
+    /// A study of `seeds` seeds from 1, on one thread, only planned.
+    fn planning(seeds: u32, resume: bool) -> Config {
+        Config {
+            seeds,
             seed_base: 1,
             threads: 1,
             out: PathBuf::from("unused.md"),
             set: Vec::new(),
             only: Vec::new(),
-            resume: false,
+            resume,
+        }
+    }
+
+    /// The twins as (setting, seed, setting that runs it).
+    fn ran_by(twins: Vec<(usize, u64, usize, String)>) -> Vec<(usize, u64, usize)> {
+        twins
+            .into_iter()
+            .map(|(k, seed, of, _)| (k, seed, of))
+            .collect()
+    }
+
+    #[test]
+    fn a_resumed_study_keeps_a_row_only_while_its_setting_makes_the_same_scene() {
+        let config = planning(1, true);
+        let all = [
+            Case::new(Group::Knobs, "same", "", &["box.width=1.2"]),
+            Case::new(Group::Knobs, "changed", "", &["box.width=1.5"]),
+            Case::new(Group::Knobs, "older", "", &["box.width=1.3"]),
+        ];
+        let jobs = plan(&config, &all, BASE).unwrap();
+        let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
+        // `changed` ran at another width; `older` was written before rows
+        // carried their scene; `gone` is no longer planned.
+        let row = |setting: &str, scene: &str| {
+            format!("{setting},knobs,1,completed,30.0,30.0,30.0,20.0,1.0,1000,,{scene}\n")
         };
+        let other = plan(
+            &config,
+            &[Case::new(Group::Knobs, "changed", "", &["box.width=1.4"])],
+            BASE,
+        )
+        .unwrap();
+        let csv = [
+            "setting,group,seed,status,theta_r_method1,theta_r_method2,theta_r_method3,theta_t,wall_time_s,particle_steps,reason,scene\n".to_string(),
+            row("same", &sample_hash(&jobs[0].1)),
+            row("changed", &sample_hash(&other[0].1)),
+            row("older", ""),
+            row("gone", &sample_hash(&jobs[0].1)),
+        ]
+        .concat();
+        let path = std::env::temp_dir().join(format!("repose-kept-{}.csv", std::process::id()));
+        std::fs::write(&path, csv).unwrap();
+        let rows: Vec<Sample> = kept(&path, &names, &jobs);
+        std::fs::remove_file(&path).ok();
+        let found: Vec<(&str, &str)> = rows.iter().map(|r| (r.setting(), r.scene())).collect();
+        assert_eq!(
+            found,
+            [
+                ("same", sample_hash(&jobs[0].1).as_str()),
+                ("older", sample_hash(&jobs[2].1).as_str())
+            ]
+        );
+    }
+
+    #[test]
+    fn settings_that_resolve_to_one_scene_run_it_once() {
+        let config = planning(2, false);
         // `b` sets the width `a` sets; `c` another; `d` sets `a`'s width and
         // a seed, which the plan's own seed overrides.
         let all = [
@@ -1132,7 +1203,7 @@ mod tests {
         ];
         let mut jobs = plan(&config, &all, BASE).unwrap();
         assert_eq!(jobs.len(), 8);
-        let found = twins(&mut jobs);
+        let found = ran_by(twins(&mut jobs));
         // So `b` and `d` are `a`'s scenes; `c` runs on its own.
         assert_eq!(found, [(1, 1, 0), (1, 2, 0), (3, 1, 0), (3, 2, 0)]);
         let left: Vec<(usize, u64)> = jobs.iter().map(|(k, s)| (*k, s.seed)).collect();
@@ -1154,8 +1225,11 @@ mod tests {
             Case::new(Group::Presets, "quick", "", &["preset=quick"]),
         ];
         let mut jobs = plan(&config, &all, heap).unwrap();
-        let found = twins(&mut jobs);
-        assert_eq!(found, [(1, 1, 0), (1, 2, 0)]);
+        let twins = twins(&mut jobs);
+        assert_eq!(ran_by(twins.clone()), [(1, 1, 0), (1, 2, 0)]);
+        // A twin's sample carries its own scene's identity, of which the
+        // thread count is no part.
+        assert_eq!(twins[0].3, sample_hash(&jobs[0].1));
         assert_eq!(jobs.len(), 6);
     }
 }

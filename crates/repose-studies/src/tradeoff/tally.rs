@@ -51,14 +51,19 @@ pub(crate) trait Costed {
     fn reason(&self) -> &str;
     fn wall_time(&self) -> f64;
     fn particle_steps(&self) -> u64;
-    /// The same sample filed under another setting (one whose scene is
-    /// this one's).
-    fn renamed(&self, case: &Case) -> Self;
+    /// The identity of the scene that made it (`repose_sweeps::spec::sample_hash`);
+    /// empty in rows written before rows carried it.
+    fn scene(&self) -> &str;
+    /// The same sample filed under another setting whose scene (`scene`,
+    /// its identity) runs the same numbers.
+    fn renamed(&self, case: &Case, scene: &str) -> Self;
+    /// The same sample with the identity of its scene written in.
+    fn with_scene(self, scene: String) -> Self;
 }
 
 /// Implements [`Costed`] for a per-sample row with the fields `setting`,
-/// `seed`, `status`, `reason`, `wall_time_s` and `particle_steps` (the
-/// columns both studies' CSVs share).
+/// `seed`, `status`, `reason`, `wall_time_s`, `particle_steps` and `scene`
+/// (the columns both studies' CSVs share).
 macro_rules! costed {
     ($row:ty) => {
         impl $crate::tradeoff::tally::Costed for $row {
@@ -80,12 +85,19 @@ macro_rules! costed {
             fn particle_steps(&self) -> u64 {
                 self.particle_steps
             }
-            fn renamed(&self, case: &$crate::tradeoff::Case) -> Self {
+            fn scene(&self) -> &str {
+                &self.scene
+            }
+            fn renamed(&self, case: &$crate::tradeoff::Case, scene: &str) -> Self {
                 Self {
                     setting: case.name.clone(),
                     group: case.group,
+                    scene: scene.to_string(),
                     ..self.clone()
                 }
+            }
+            fn with_scene(self, scene: String) -> Self {
+                Self { scene, ..self }
             }
         }
     };
