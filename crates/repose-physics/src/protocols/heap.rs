@@ -233,7 +233,10 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
             "material.modulus_fraction",
             Value::from(STANDARD_MODULUS_FRACTION),
         ));
-        v.push(("numerics.attraction_kick", Value::from(0.5)));
+        v.push((
+            "numerics.attraction_kick",
+            Value::from(pour::ATTRACTION_KICK),
+        ));
     }
     v
 }

@@ -540,6 +540,10 @@ pub fn check_scene(scene: &Scene, c: &mut Checks) {
     }
 }
 
+/// The largest kick of the contact attraction per step, in `√(g d)`, that
+/// the softened presets allow (`numerics.attraction_kick`).
+pub const ATTRACTION_KICK: f64 = 0.5;
+
 /// The settings the fidelity presets give the 3D protocols. `quick`
 /// softens the modulus by its stiffness number `κ = Y/(ρ g d)`, kept stiff
 /// enough for cohesion by `κ_c = Y d/(π γ)` (where the scene gives no
@@ -557,7 +561,7 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
         Preset::Quick => vec![
             ("numerics.integrator", Value::from("verlet")),
             ("numerics.dt_factor", Value::from(0.1)),
-            ("numerics.attraction_kick", Value::from(0.5)),
+            ("numerics.attraction_kick", Value::from(ATTRACTION_KICK)),
             ("material.kappa", Value::from(1e5)),
             ("material.kappa_cohesion", Value::from(1e4)),
         ],

@@ -532,9 +532,9 @@ impl HeapReport {
         let g = GLASS;
         format!(
             "* **The contact form.** In the default form (limits on the net normal force, \
-             the attraction fading in contact) glass stands {} above dry glass. As eqs. 11, 13 and 15 print it — limits on the repulsion, which the \
-             attraction raises by π γ d, twelve weights here, and the attraction constant in \
-             contact — glass stands {} against the default; with net limits and a constant \
+             the attraction fading in contact) glass stands {} above dry glass. As eqs. 11, \
+             13 and 15 print it — limits on the repulsion, which the attraction raises by \
+             π γ d, twelve weights here, and the attraction constant in contact — glass stands {} against the default; with net limits and a constant \
              attraction {}. `quick` stands {} against glass in the default form, {} as \
              printed and {} with a constant attraction, each against glass in its own form; \
              in the default form it stands {} from `quick` without cohesion.\n",

@@ -425,7 +425,7 @@ pub(crate) fn gather<S: Costed + serde::de::DeserializeOwned + Send, M>(
             let ran = samples
                 .iter()
                 .find(|s| s.setting() == all[*of].name && s.seed() == *seed)?;
-            Some(ran.renamed(&all[*k], scene))
+            Some(ran.renamed(&all[*k]).with_scene(scene.clone()))
         })
         .collect();
     let shared = copies.len();

@@ -54,9 +54,9 @@ pub(crate) trait Costed {
     /// The identity of the scene that made it (`repose_sweeps::spec::sample_hash`);
     /// empty in rows written before rows carried it.
     fn scene(&self) -> &str;
-    /// The same sample filed under another setting whose scene (`scene`,
-    /// its identity) runs the same numbers.
-    fn renamed(&self, case: &Case, scene: &str) -> Self;
+    /// The same sample filed under another setting (one whose scene runs
+    /// the same numbers).
+    fn renamed(&self, case: &Case) -> Self;
     /// The same sample with the identity of its scene written in.
     fn with_scene(self, scene: String) -> Self;
 }
@@ -88,11 +88,10 @@ macro_rules! costed {
             fn scene(&self) -> &str {
                 &self.scene
             }
-            fn renamed(&self, case: &$crate::tradeoff::Case, scene: &str) -> Self {
+            fn renamed(&self, case: &$crate::tradeoff::Case) -> Self {
                 Self {
                     setting: case.name.clone(),
                     group: case.group,
-                    scene: scene.to_string(),
                     ..self.clone()
                 }
             }
