@@ -126,9 +126,14 @@ pub struct Queue {
 }
 
 /// A variant of the model as a list, `material.limit_load = "net", …`
-/// (empty for the paper's own model).
+/// (empty for the paper's own model). A setting that changes a sample's
+/// speed alone, such as its thread count, is no variant and is left out.
 pub fn variant_label(set: &[(String, Value)]) -> String {
-    let parts: Vec<String> = set.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+    let parts: Vec<String> = set
+        .iter()
+        .filter(|(k, _)| !repose_sweeps::spec::speed_only(k))
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect();
     parts.join(", ")
 }
 
@@ -304,6 +309,26 @@ mod tests {
         assert!(same(&json!([0, 0, -9.81]), &json!([0.0, 0.0, -9.81])));
         assert!(!same(&json!([0, 0, -9.81]), &json!([0.0, -9.81])));
         assert!(!same(&json!("1"), &json!(1)));
+    }
+
+    #[test]
+    fn a_variant_names_what_changes_the_numbers_and_not_the_thread_count() {
+        let set = |pairs: &[(&str, Value)]| -> Vec<(String, Value)> {
+            pairs
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.clone()))
+                .collect()
+        };
+        let label = variant_label(&set(&[
+            ("material.limit_load", json!("net")),
+            ("numerics.threads", json!(2)),
+            ("material.contact_attraction", json!("fading")),
+        ]));
+        assert_eq!(
+            label,
+            r#"material.limit_load = "net", material.contact_attraction = "fading""#
+        );
+        assert_eq!(variant_label(&set(&[("numerics.threads", json!(2))])), "");
     }
 
     #[test]

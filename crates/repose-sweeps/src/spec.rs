@@ -425,12 +425,27 @@ fn locate(mut err: SceneError, point: &Map<String, Value>) -> SceneError {
     err
 }
 
-/// A resolved scene as JSON (keys sorted) without its thread count:
-/// threads change the speed of a sample, never its numbers.
+/// Scene settings that change how fast a sample runs and never its
+/// numbers (`section.key`): a sample's identity leaves them out.
+pub const SPEED_ONLY: [&str; 1] = ["numerics.threads"];
+
+/// Whether setting `key` (`section.key`) changes a sample's speed alone.
+pub fn speed_only(key: &str) -> bool {
+    SPEED_ONLY.contains(&key)
+}
+
+/// A resolved scene as JSON (keys sorted) without the settings that
+/// change its speed alone ([`SPEED_ONLY`]): threads change the speed of a
+/// sample, never its numbers.
 pub fn canonical(scene: &Scene) -> Value {
     let mut canonical = serde_json::to_value(scene).unwrap_or(Value::Null);
-    if let Some(numerics) = canonical.get_mut("numerics").and_then(Value::as_object_mut) {
-        numerics.remove("threads");
+    for key in SPEED_ONLY {
+        let Some((section, name)) = key.split_once('.') else {
+            continue;
+        };
+        if let Some(table) = canonical.get_mut(section).and_then(Value::as_object_mut) {
+            table.remove(name);
+        }
     }
     canonical
 }
@@ -493,6 +508,34 @@ mod tests {
             serde_json::to_value(sweep("cheapest")).unwrap()["order"],
             "cheapest"
         );
+    }
+
+    #[test]
+    fn a_sample_on_more_threads_is_the_same_sample_and_other_numerics_are_not() {
+        let sweep = |numerics: Value| {
+            spec(json!({
+                "protocol": "heap",
+                "base": {"heap": {"plate": 20, "max_grains": 1500}, "numerics": numerics},
+                "axes": {"grains.diameter": [1e-4, 1e-3]},
+                "samples": 2
+            }))
+            .expand()
+            .unwrap()
+        };
+        let hashes = |jobs: &[JobSpec]| -> Vec<String> {
+            jobs.iter().map(|j| j.sample_hash.clone()).collect()
+        };
+        let one = sweep(json!({"threads": 1}));
+        let two = sweep(json!({"threads": 2}));
+        assert_eq!(hashes(&one), hashes(&two));
+        // The thread count still reaches the engine.
+        assert_eq!(two[0].scene.numerics.threads, 2);
+        assert_eq!(one[0].scene.numerics.threads, 1);
+        // A setting that changes the numbers makes other samples.
+        let finer = sweep(json!({"threads": 2, "dt_factor": 0.05}));
+        assert!(hashes(&finer).iter().all(|h| !hashes(&one).contains(h)));
+        assert!(SPEED_ONLY.iter().all(|k| speed_only(k)));
+        assert!(!speed_only("numerics.dt_factor"));
     }
 
     #[test]
