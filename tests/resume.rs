@@ -134,7 +134,7 @@ async fn resumes_after_a_kill(database: &str) {
 
     let log = finish(&store, &created.id, start_worker(database)).await;
 
-    let stored: String = sqlx::query_scalar("SELECT report FROM results")
+    let stored: String = sqlx::query_scalar("SELECT report FROM result_reports")
         .fetch_one(store.pool())
         .await
         .unwrap();
@@ -236,7 +236,7 @@ async fn a_heap_handed_back_on_sigterm_is_saved_first_and_resumes_bit_for_bit() 
         )),
         "{log}"
     );
-    let stored: String = sqlx::query_scalar("SELECT report FROM results")
+    let stored: String = sqlx::query_scalar("SELECT report FROM result_reports")
         .fetch_one(store.pool())
         .await
         .unwrap();

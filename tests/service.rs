@@ -227,6 +227,7 @@ async fn a_worker_with_the_least_privilege_role_finishes_a_sweep_on_postgres() {
     let worker = sqlx::AnyPool::connect(&url).await.unwrap();
     for statement in [
         "DELETE FROM results",
+        "DELETE FROM result_reports",
         "UPDATE sweeps SET state = 'cancelled'",
         "INSERT INTO sweeps (id) VALUES ('x')",
         "DROP TABLE metric_values",

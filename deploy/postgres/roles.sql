@@ -7,7 +7,7 @@
 -- and applies the migrations of a new version. `repose worker` on cluster
 -- nodes connects as repose_worker, which may do what a worker does and no
 -- more: read sweeps and jobs, claim, renew and finish jobs, write results,
--- their metric rows and their points' running aggregates, and add jobs to
+-- their reports, metric rows and points' running aggregates, and add jobs to
 -- the points of a sweep that chases a standard error (`target_sem`). It
 -- cannot create, cancel or delete sweeps, delete results or jobs, or
 -- change tables; a worker of a newer version than the schema stops with an
@@ -26,11 +26,11 @@ END
 $$;
 
 GRANT USAGE ON SCHEMA public TO repose_worker;
-GRANT SELECT ON sweeps, jobs, results, metric_values, point_stats, point_metrics,
-    _sqlx_migrations TO repose_worker;
+GRANT SELECT ON sweeps, jobs, results, result_reports, metric_values, point_stats,
+    point_metrics, _sqlx_migrations TO repose_worker;
 -- claim, renew, finish; the running aggregates of each point
 GRANT UPDATE ON jobs, point_stats, point_metrics TO repose_worker;
-GRANT INSERT ON results, metric_values, point_metrics TO repose_worker;
+GRANT INSERT ON results, result_reports, metric_values, point_metrics TO repose_worker;
 -- the samples a `target_sem` sweep adds to its points
 GRANT INSERT ON jobs TO repose_worker;
 GRANT DELETE ON point_metrics TO repose_worker;

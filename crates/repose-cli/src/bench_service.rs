@@ -113,6 +113,7 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
     let batch = 250;
     let mut tx = store.pool().begin().await?;
     let (mut jobs, mut results) = (Vec::with_capacity(batch), Vec::with_capacity(batch));
+    let mut reports = Vec::with_capacity(batch);
     let mut metrics = Vec::with_capacity(4 * batch);
     for k in 0..samples {
         let point = k / per_point;
@@ -124,8 +125,9 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
             "('{id}-j{k}', '{id}', {k}, '{{\"box.width\":{width},\"contact.mu\":{mu}}}', {seed}, {seed}, '{hash}', '{{}}', 'done', 1, 3, {now}, {now})"
         ));
         results.push(format!(
-            "('{hash}', '{id}-j{k}', 'bench', {seed}, 'completed', NULL, 400, 100, 300, 150000, 2.0, 1.5, '{{}}', {now})"
+            "('{hash}', '{id}-j{k}', 'bench', {seed}, 'completed', NULL, 400, 100, 300, 150000, 2.0, 1.5, {now})"
         ));
+        reports.push(format!("('{hash}', '{{}}')"));
         for (metric, v) in [
             ("theta_r", theta),
             ("theta_r_line", theta + 1.0),
@@ -143,8 +145,14 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
             .await?;
             sqlx::query(&format!(
                 "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, grains_initial, grains_final, \
-                 grains_lost, iterations, simulated_time, wall_time, report, created_at) VALUES {}",
+                 grains_lost, iterations, simulated_time, wall_time, created_at) VALUES {}",
                 results.join(",")
+            ))
+            .execute(&mut *tx)
+            .await?;
+            sqlx::query(&format!(
+                "INSERT INTO result_reports (sample_hash, report) VALUES {}",
+                reports.join(",")
             ))
             .execute(&mut *tx)
             .await?;
@@ -156,6 +164,7 @@ async fn load_samples(store: &Store, samples: usize) -> anyhow::Result<String> {
             .await?;
             jobs.clear();
             results.clear();
+            reports.clear();
             metrics.clear();
         }
     }

@@ -261,11 +261,12 @@ impl Store {
 
     /// The full run report of one sample, as stored.
     pub async fn report(&self, sample_hash: &str) -> Result<Option<serde_json::Value>> {
-        let text: Option<String> =
-            sqlx::query_scalar(&self.sql("SELECT report FROM results WHERE sample_hash = $1"))
-                .bind(sample_hash)
-                .fetch_optional(&self.pool)
-                .await?;
+        let text: Option<String> = sqlx::query_scalar(
+            &self.sql("SELECT report FROM result_reports WHERE sample_hash = $1"),
+        )
+        .bind(sample_hash)
+        .fetch_optional(&self.pool)
+        .await?;
         Ok(match text {
             Some(t) => Some(serde_json::from_str(&t)?),
             None => None,

@@ -246,8 +246,8 @@ impl Store {
         }
         let inserted = sqlx::query(&self.sql(
             "INSERT INTO results (sample_hash, job_id, engine, seed, outcome, reason, grains_initial, grains_final, grains_lost, \
-             iterations, simulated_time, wall_time, report, created_at, particle_steps) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15) \
+             iterations, simulated_time, wall_time, created_at, particle_steps) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) \
              ON CONFLICT (sample_hash) DO NOTHING",
         ))
         // Not a cached statement: through `sqlx::Any`, a NULL bound to a
@@ -268,7 +268,6 @@ impl Store {
         .bind(result.counts.iterations)
         .bind(result.counts.simulated_time)
         .bind(result.counts.wall_time)
-        .bind(&result.report)
         .bind(now)
         .bind(result.counts.particle_steps)
         .execute(&mut *tx)
@@ -289,22 +288,41 @@ impl Store {
         .execute(&mut *tx)
         .await?;
         if inserted.rows_affected() == 1 {
-            let failed = result.outcome != "completed";
-            self.aggregate_result(&mut tx, sample_hash, failed, &result.metrics)
-                .await?;
-            for (metric, value) in result.metrics.iter().filter(|(_, v)| v.is_finite()) {
-                sqlx::query(&self.sql(
-                    "INSERT INTO metric_values (sample_hash, metric, value) VALUES ($1, $2, $3)",
-                ))
-                .bind(sample_hash)
-                .bind(metric)
-                .bind(*value)
-                .execute(&mut *tx)
-                .await?;
-            }
+            self.record_new(&mut tx, sample_hash, result).await?;
         }
         tx.commit().await?;
         Ok(true)
+    }
+
+    /// What a sample stored for the first time brings besides its row:
+    /// its report, its metric values and their running aggregates.
+    async fn record_new(
+        &self,
+        tx: &mut sqlx::AnyConnection,
+        sample_hash: &str,
+        result: &ResultRecord,
+    ) -> Result<()> {
+        sqlx::query(&self.sql("INSERT INTO result_reports (sample_hash, report) VALUES ($1, $2)"))
+            .bind(sample_hash)
+            .bind(&result.report)
+            .execute(&mut *tx)
+            .await?;
+        let failed = result.outcome != "completed";
+        self.aggregate_result(&mut *tx, sample_hash, failed, &result.metrics)
+            .await?;
+        for (metric, value) in result.metrics.iter().filter(|(_, v)| v.is_finite()) {
+            sqlx::query(
+                &self.sql(
+                    "INSERT INTO metric_values (sample_hash, metric, value) VALUES ($1, $2, $3)",
+                ),
+            )
+            .bind(sample_hash)
+            .bind(metric)
+            .bind(*value)
+            .execute(&mut *tx)
+            .await?;
+        }
+        Ok(())
     }
 
     /// Marks the sweep cancelled and its queued jobs cancelled; running
