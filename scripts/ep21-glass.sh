@@ -25,10 +25,10 @@
 # Environment: REPOSE (the program), STORE (the SQLite store); further
 # arguments go to `repose reproduce` (e.g. --workers 1, or --first
 # 'gravity=[0,0,-9.81]' to finish Earth's points, figure 2's, first).
-# Once fewer samples are left than cores, `--workers 1 --set
-# numerics.threads=2` gives the last one both: a sample's thread count is
-# no part of its identity, so the store keeps every finished sample and
-# the report names no variant for it.
+# Once fewer samples are left than workers, the running ones take the
+# idle workers' cores as extra threads, with the same numbers; a sample's
+# thread count is no part of its identity, so `--set numerics.threads=2`
+# keeps every finished sample too, and the report names no variant for it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPOSE=${REPOSE:-$PWD/target/release/repose}

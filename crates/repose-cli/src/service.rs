@@ -5,7 +5,7 @@
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use repose_store::Store;
-use repose_worker::{run_worker, shutdown_on_signals, Tally, WorkerConfig};
+use repose_worker::{run_worker, shutdown_on_signals, Cores, Tally, WorkerConfig};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -225,10 +225,13 @@ pub(crate) fn spawn_workers(
     shutdown: &tokio::sync::watch::Receiver<bool>,
 ) -> anyhow::Result<Vec<tokio::task::JoinHandle<Tally>>> {
     let prefix = owner_prefix();
+    // One core a worker; one waiting for work lends its core to the others' samples.
+    let cores = Cores::new(count);
     (0..count)
         .map(|k| {
             let mut config = lease.config(format!("{prefix}-{k}"))?;
             config.exit_when_idle = exit_when_idle;
+            config.cores = Some(cores.clone());
             Ok(tokio::spawn(run_worker(
                 store.clone(),
                 config,

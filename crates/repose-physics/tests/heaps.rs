@@ -372,6 +372,31 @@ fn threads_share_the_pair_and_wall_contacts_without_changing_a_bit() {
     assert_eq!(one.wall_contacts.history, two.wall_contacts.history);
 }
 
+/// A run handed a second thread partway, and a third, then back to one,
+/// ends with every bit of the run that kept one thread all along.
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_run_whose_threads_change_between_steps_keeps_every_bit() {
+    let mut one = bed();
+    let mut changing = bed();
+    changing.min_shared_pairs = 0;
+    for s in [&mut one, &mut changing] {
+        s.sort_every = 500;
+    }
+    for threads in [1, 2, 3, 1, 2] {
+        changing.set_threads(threads).unwrap();
+        assert_eq!(changing.threads(), threads);
+        one.run(1500).unwrap();
+        changing.run(1500).unwrap();
+    }
+    assert!(one.contact_forces().len() > 500);
+    assert_eq!(one.particles.pos, changing.particles.pos);
+    assert_eq!(one.particles.vel, changing.particles.vel);
+    assert_eq!(one.particles.omega, changing.particles.omega);
+    assert_eq!(one.neighbors.history, changing.neighbors.history);
+    assert_eq!(one.wall_contacts.history, changing.wall_contacts.history);
+}
+
 /// A grain driven through the floor fails the run with the same grain,
 /// wall and time on two threads as on one.
 #[test]

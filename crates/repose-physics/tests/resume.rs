@@ -2,7 +2,9 @@
 //! same numbers, bit for bit, as the run that never stopped — for the
 //! poured heap (engine, pour stream and counters), the packed column
 //! (engine only, on the Gear integrator) and a 2D free run with friction, across a change of thread count, and a checkpoint that
-//! does not belong to the scene is set aside rather than trusted.
+//! does not belong to the scene is set aside rather than trusted. A run
+//! handed more threads partway (a worker lending an idle core) ends with
+//! the same numbers too.
 
 use repose_physics::{run, Checkpoint, Observer, Progress, RunReport, Scene};
 use serde_json::Value;
@@ -88,6 +90,36 @@ point = [0.0, 0.0]
 normal = [0.0, 1.0]
 "#;
 
+/// The narrow cohesive column of `examples/packing.toml`: about a
+/// thousand grains, enough listed pairs for a step to be shared.
+const COLUMN: &str = r#"
+protocol = "packing"
+preset = "quick"
+seed = 1
+[material]
+surface_energy = 0.05
+[packing]
+width = 8
+height = 40
+"#;
+
+/// Hands the run `threads` threads from its third check on, as a worker
+/// lends it the core of another that has nothing to run.
+struct Lender {
+    checks: usize,
+    threads: usize,
+}
+
+impl Observer for Lender {
+    fn progress(&mut self, _update: &Progress) -> bool {
+        self.checks += 1;
+        true
+    }
+    fn threads(&mut self) -> Option<usize> {
+        (self.checks >= 3).then_some(self.threads)
+    }
+}
+
 fn scene(text: &str, extra: &[&str]) -> Scene {
     let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
     Scene::from_toml(text, &o).unwrap()
@@ -164,6 +196,21 @@ fn a_packing_resumed_from_a_checkpoint_ends_bit_for_bit_as_the_whole_run() {
 #[test]
 fn a_free_run_resumed_from_a_checkpoint_ends_bit_for_bit_as_the_whole_run() {
     resumes_bit_for_bit(FREE_RUN, 3);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "long: run with --release")]
+fn a_column_handed_more_threads_midway_ends_with_the_same_numbers() {
+    let base = scene(COLUMN, &[]);
+    let whole = run(&base, &mut Recorder::default()).unwrap();
+    assert!(whole.outcome.is_completed(), "{:?}", whole.outcome);
+    let mut lender = Lender {
+        checks: 0,
+        threads: 2,
+    };
+    let lent = run(&base, &mut lender).unwrap();
+    assert!(lender.checks > 10, "{} checks", lender.checks);
+    assert_eq!(numbers(&lent), numbers(&whole));
 }
 
 #[test]

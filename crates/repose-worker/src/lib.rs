@@ -25,10 +25,17 @@
 //! A run that ends without a result (not settled, blow-up) is still a
 //! result: its outcome and reason are stored like any other. Only a scene
 //! that cannot even be read marks the job failed.
+//!
+//! The workers of one process may share their cores ([`Cores`]): while
+//! some find nothing to claim, the samples the others run take their
+//! cores as extra threads at their next check, and give them back once
+//! every worker is busy again. A sample's numbers are the same on any
+//! number of threads, so this changes only how soon the last samples of
+//! a sweep finish.
 
 use repose_physics::{Checkpoint, Observer, Progress, RunReport, Scene, SceneError};
 use repose_store::{Claim, Lease, ResultRecord, RunCounts, Store};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
@@ -48,6 +55,59 @@ pub struct WorkerConfig {
     pub exit_when_idle: bool,
     /// Time between checkpoints of a resumable sample (none: never).
     pub checkpoint_every: Option<Duration>,
+    /// The cores this worker shares with the other workers of its process
+    /// (none: its samples keep the threads their scenes ask for).
+    pub cores: Option<Arc<Cores>>,
+}
+
+/// The cores of a process's workers, one each: a worker with nothing to
+/// run lends its core to the samples the others are running.
+#[derive(Debug)]
+pub struct Cores {
+    workers: usize,
+    busy: AtomicUsize,
+    /// The most threads handed to one sample so far.
+    most: AtomicUsize,
+}
+
+impl Cores {
+    /// Cores for `workers` workers, none of them busy yet.
+    pub fn new(workers: usize) -> Arc<Cores> {
+        Arc::new(Cores {
+            workers: workers.max(1),
+            busy: AtomicUsize::new(0),
+            most: AtomicUsize::new(0),
+        })
+    }
+
+    /// The threads a running sample whose scene asks for `threads` may use
+    /// now: its share of the cores, the idle workers' included.
+    pub fn threads_for(&self, threads: usize) -> usize {
+        let busy = self.busy.load(Ordering::Relaxed).max(1);
+        let now = threads.max(1) * (self.workers / busy).max(1);
+        self.most.fetch_max(now, Ordering::Relaxed);
+        now
+    }
+
+    /// The most threads handed to one sample so far (0 before the first).
+    pub fn most_threads(&self) -> usize {
+        self.most.load(Ordering::Relaxed)
+    }
+
+    /// Marks one more worker busy until the returned guard is dropped.
+    fn take(self: &Arc<Cores>) -> Busy {
+        self.busy.fetch_add(1, Ordering::Relaxed);
+        Busy(self.clone())
+    }
+}
+
+/// A worker's claim on its core while it runs a job.
+struct Busy(Arc<Cores>);
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        self.0.busy.fetch_sub(1, Ordering::Relaxed);
+    }
 }
 
 impl WorkerConfig {
@@ -59,6 +119,7 @@ impl WorkerConfig {
             idle: Duration::from_millis(500),
             exit_when_idle: false,
             checkpoint_every: Some(Duration::from_secs(600)),
+            cores: None,
         }
     }
 }
@@ -97,6 +158,10 @@ struct JobObserver {
     last: Instant,
     resume: Option<Checkpoint>,
     saved: watch::Sender<Option<Checkpoint>>,
+    /// The threads the scene asks for, and the cores to take more from.
+    lend: Option<(usize, Arc<Cores>)>,
+    /// The most threads the run was handed.
+    most_threads: usize,
 }
 
 impl Observer for JobObserver {
@@ -131,6 +196,16 @@ impl Observer for JobObserver {
     fn saved(&mut self) -> Option<Checkpoint> {
         self.resumable = true;
         self.resume.take()
+    }
+
+    fn threads(&mut self) -> Option<usize> {
+        let (threads, cores) = self.lend.as_ref()?;
+        let now = cores.threads_for(*threads);
+        if now > self.most_threads {
+            tracing::info!(job = %self.job, threads = now, "running on the cores of idle workers too");
+            self.most_threads = now;
+        }
+        Some(now)
     }
 
     fn resumed(&mut self, result: Result<u64, String>) {
@@ -193,7 +268,9 @@ pub async fn run_worker(
             continue;
         };
         tracing::info!(owner = %config.owner, job = %job.job_id, attempt = job.attempts, "claimed");
+        let busy = config.cores.as_ref().map(Cores::take);
         tally.add(work(&store, &config, &job, &mut shutdown).await);
+        drop(busy);
     }
 }
 
@@ -336,6 +413,11 @@ async fn run_leased(
         last: Instant::now(),
         resume: stored_checkpoint(store, job).await,
         saved,
+        lend: config
+            .cores
+            .clone()
+            .map(|cores| (scene.numerics.threads, cores)),
+        most_threads: scene.numerics.threads,
     };
     let mut simulation =
         tokio::task::spawn_blocking(move || repose_physics::run(&scene, &mut observer));
@@ -465,4 +547,35 @@ pub fn shutdown_on_signals() -> watch::Receiver<bool> {
         let _ = tx.send(true);
     });
     rx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_idle_workers_core_goes_to_the_busy_ones_and_comes_back() {
+        let cores = Cores::new(2);
+        let first = cores.take();
+        assert_eq!(cores.threads_for(1), 2, "one of two workers idle");
+        let second = cores.take();
+        assert_eq!(cores.threads_for(1), 1, "both busy");
+        assert_eq!(cores.threads_for(2), 2, "a scene's own threads are kept");
+        drop(first);
+        assert_eq!(cores.threads_for(1), 2);
+        drop(second);
+        assert_eq!(cores.busy.load(Ordering::Relaxed), 0);
+        assert_eq!(cores.most_threads(), 2);
+        // Four workers, three idle: the one running takes all four cores;
+        // two running take two each.
+        let four = Cores::new(4);
+        let a = four.take();
+        assert_eq!(four.threads_for(1), 4);
+        let b = four.take();
+        assert_eq!(four.threads_for(1), 2);
+        let c = four.take();
+        assert_eq!(four.threads_for(1), 1);
+        drop((a, b, c));
+        assert_eq!(Cores::new(1).threads_for(1), 1);
+    }
 }

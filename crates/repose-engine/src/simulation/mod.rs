@@ -275,8 +275,14 @@ where
         }
     }
 
-    /// Computes forces on `threads` threads (1: on the calling thread).
-    /// Results are bit-identical for any number.
+    /// The threads the force loop runs on.
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// Computes forces on `threads` threads (1: on the calling thread),
+    /// from the next step on. Results are bit-identical for any number, and
+    /// for a run whose number changes between steps.
     pub fn set_threads(&mut self, threads: usize) -> Result<(), rayon::ThreadPoolBuildError> {
         self.pool = if threads > 1 {
             let pool = rayon::ThreadPoolBuilder::new()

@@ -40,8 +40,8 @@ const SHARES_PER_THREAD: usize = 2;
 /// How the current pair list is shared among the threads.
 #[derive(Debug, Default)]
 pub(super) struct Shares {
-    /// The list build (and grain count) these shares were planned for.
-    planned_for: Option<(u64, usize)>,
+    /// The list build, grain count and thread count these shares were planned for.
+    planned_for: Option<(u64, usize, usize)>,
     parts: Vec<Share>,
 }
 
@@ -113,7 +113,7 @@ where
         if self.rest.is_some() {
             self.wake.resize(n);
         }
-        let key = (self.neighbors.builds, n);
+        let key = (self.neighbors.builds, n, pool.current_num_threads());
         if self.shares.planned_for != Some(key) {
             // More shares than threads: the pool balances shares of unequal
             // cost (a dense bed below, falling grains above).

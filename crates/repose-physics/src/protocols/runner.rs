@@ -43,6 +43,13 @@ pub trait Observer {
     /// Told whether the checkpoint it handed over was used: the step it
     /// resumed from, or why the run started over.
     fn resumed(&mut self, _result: Result<u64, String>) {}
+
+    /// Asked at every check: the threads the run may compute on from now
+    /// on (`None` keeps those it has). Every number of the run is the same
+    /// on any number of threads, so this changes its speed alone.
+    fn threads(&mut self) -> Option<usize> {
+        None
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -165,11 +172,16 @@ where
             kinetic_energy: point.kinetic_energy,
             max_speed: point.max_speed,
         };
-        if self.observer.progress(&update) {
-            Ok(point)
-        } else {
-            Err(Stop::Cancelled)
+        if !self.observer.progress(&update) {
+            return Err(Stop::Cancelled);
         }
+        if let Some(threads) = self.observer.threads().filter(|&t| t >= 1) {
+            if threads != self.sim.threads() {
+                // A pool that cannot be built leaves the threads as they are.
+                let _ = self.sim.set_threads(threads);
+            }
+        }
+        Ok(point)
     }
 
     /// Runs `steps` steps, sampling at every check.
