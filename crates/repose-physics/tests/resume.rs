@@ -90,18 +90,9 @@ point = [0.0, 0.0]
 normal = [0.0, 1.0]
 "#;
 
-/// The narrow cohesive column of `examples/packing.toml`: about a
-/// thousand grains, enough listed pairs for a step to be shared.
-const COLUMN: &str = r#"
-protocol = "packing"
-preset = "quick"
-seed = 1
-[material]
-surface_energy = 0.05
-[packing]
-width = 8
-height = 40
-"#;
+/// The narrow cohesive column of the examples: about a thousand grains,
+/// enough listed pairs for a step to be shared.
+const COLUMN: &str = include_str!("../../../examples/packing.toml");
 
 /// Hands the run `threads` threads from its third check on, as a worker
 /// lends it the core of another that has nothing to run.
