@@ -539,6 +539,28 @@ mod tests {
     }
 
     #[test]
+    fn a_scene_read_back_from_its_stored_text_is_the_same_sample() {
+        // A step whose decimal text a best-effort parser reads one unit in
+        // the last place off (…693e-8): the worker must run the scene stored.
+        let dt: f64 = 1.869933361786569e-8;
+        let jobs = spec(json!({
+            "protocol": "heap",
+            "base": {"heap": {"plate": 20, "max_grains": 1500}, "numerics": {"dt": dt}},
+            "axes": {"grains.diameter": [6e-5, 1e-3]},
+            "samples": 1
+        }))
+        .expand()
+        .unwrap();
+        for job in &jobs {
+            let text = serde_json::to_string(&job.scene).unwrap();
+            assert!(text.contains("1.869933361786569e-8"), "{text}");
+            let back = Scene::from_stored(serde_json::from_str(&text).unwrap()).unwrap();
+            assert_eq!(back.numerics.dt.map(f64::to_bits), Some(dt.to_bits()));
+            assert_eq!(sample_hash(&back), job.sample_hash);
+        }
+    }
+
+    #[test]
     fn cheapest_order_keeps_listed_order_where_the_protocol_estimates_nothing() {
         let s = spec(json!({
             "protocol": "fill_release",
