@@ -532,4 +532,19 @@ async fn retry_runs_failed_jobs_again_and_backup_copies_a_live_store() {
     let again = backup(&copy);
     assert_eq!(again.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&again.stderr).contains("exists already"));
+    // A store that is not there is named, not created empty and copied.
+    let missing = scratch("missing.db");
+    let out = Command::new(BIN)
+        .args(["backup", "--database"])
+        .arg(format!("sqlite://{}", missing.display()))
+        .arg(scratch("copy-of-missing.db"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--database") && stderr.contains("no store"),
+        "{stderr}"
+    );
+    assert!(!missing.exists());
 }

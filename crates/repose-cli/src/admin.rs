@@ -61,6 +61,11 @@ pub fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
              pg_dump (docs/service.md)"
         );
     }
+    let source = args.database["sqlite:".len()..].trim_start_matches("//");
+    let source = source.split('?').next().unwrap_or(source);
+    if !std::path::Path::new(source).exists() {
+        bail!("--database: there is no store at {source}");
+    }
     if args.output.exists() {
         bail!("{} exists already; name a new file", args.output.display());
     }
@@ -70,7 +75,8 @@ pub fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
         .context("the output path must be valid UTF-8")?
         .to_string();
     runtime()?.block_on(async {
-        let store = repose_store::Store::open(&args.database)
+        // Not `open`: a store served by another build keeps its schema.
+        let store = repose_store::Store::connect(&args.database)
             .await
             .with_context(|| format!("cannot open the database {}", args.database))?;
         let counts = store.backup_into(&target).await?;

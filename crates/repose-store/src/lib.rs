@@ -197,6 +197,17 @@ impl Store {
     /// Connects (creating an SQLite file on first start) and applies the
     /// migrations the database lacks.
     pub async fn open(url: &str) -> Result<Store> {
+        let store = Store::connect(url).await?;
+        if !store.schema_is_current().await {
+            MIGRATOR.run(&store.pool).await?;
+        }
+        Ok(store)
+    }
+
+    /// Connects without touching the schema, whatever version it is at: for
+    /// reading a store another build may be serving (a backup), which a
+    /// migration would change under it.
+    pub async fn connect(url: &str) -> Result<Store> {
         sqlx::any::install_default_drivers();
         let backend = if url.starts_with("sqlite:") {
             Backend::Sqlite
@@ -239,11 +250,7 @@ impl Store {
                     .await?
             }
         };
-        let store = Store { pool, backend };
-        if !store.schema_is_current().await {
-            MIGRATOR.run(&store.pool).await?;
-        }
-        Ok(store)
+        Ok(Store { pool, backend })
     }
 
     /// Whether every migration this build knows has been applied. A
@@ -273,7 +280,8 @@ impl Store {
             .bind(path)
             .execute(&self.pool)
             .await?;
-        let copy = Store::open(&format!("sqlite://{path}")).await?;
+        // The copy keeps the schema of the store it copies.
+        let copy = Store::connect(&format!("sqlite://{path}")).await?;
         let mut counts = [0i64; 3];
         for (n, table) in counts.iter_mut().zip(["sweeps", "jobs", "results"]) {
             *n = sqlx::query_scalar(&format!("SELECT COUNT(*) FROM {table}"))
