@@ -25,20 +25,6 @@ fn scratch() -> PathBuf {
     repose_testkit::scratch_dir("repose-migration")
 }
 
-/// A migrator holding only the migrations 0.1 had.
-async fn schema_0_1(dir: &Path) -> sqlx::migrate::Migrator {
-    let source = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../migrations");
-    let old = dir.join("migrations-0.1");
-    std::fs::create_dir_all(&old).unwrap();
-    for name in [
-        "0001_sweeps_jobs_results.sql",
-        "0002_results_particle_steps.sql",
-    ] {
-        std::fs::copy(source.join(name), old.join(name)).unwrap();
-    }
-    sqlx::migrate::Migrator::new(old).await.unwrap()
-}
-
 /// How each column is bound: 't' text, 'i' integer, 'f' real.
 fn kind(table: &str, column: &str) -> char {
     match (table, column) {
@@ -57,7 +43,12 @@ fn kind(table: &str, column: &str) -> char {
 async fn load(url: &str, dir: &Path) {
     sqlx::any::install_default_drivers();
     let pool = sqlx::AnyPool::connect(url).await.unwrap();
-    schema_0_1(dir).await.run(&pool).await.unwrap();
+    // The migrations 0.1 had.
+    repose_testkit::migrations_up_to(2, dir)
+        .await
+        .run(&pool)
+        .await
+        .unwrap();
     let rows = fixture("rows.json");
     for table in ["sweeps", "jobs", "results"] {
         for row in rows[table].as_array().unwrap() {

@@ -2,24 +2,6 @@
 //! serving keeps its schema (a migration would change the tables under
 //! that build's feet), and so does the copy. Opening the store migrates it.
 
-use std::path::{Path, PathBuf};
-
-/// The migrations up to and including `last`, in a folder of their own.
-async fn migrations_up_to(last: i64, dir: &Path) -> sqlx::migrate::Migrator {
-    let source = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../migrations");
-    let old = dir.join("migrations");
-    std::fs::create_dir_all(&old).unwrap();
-    for entry in std::fs::read_dir(&source).unwrap() {
-        let path = entry.unwrap().path();
-        let name = path.file_name().unwrap().to_str().unwrap().to_string();
-        let version: i64 = name[..4].parse().unwrap();
-        if version <= last {
-            std::fs::copy(&path, old.join(&name)).unwrap();
-        }
-    }
-    sqlx::migrate::Migrator::new(old).await.unwrap()
-}
-
 async fn version(url: &str) -> i64 {
     let pool = sqlx::AnyPool::connect(url).await.unwrap();
     let v: i64 = sqlx::query_scalar("SELECT MAX(version) FROM _sqlx_migrations")
@@ -36,7 +18,7 @@ async fn a_backup_leaves_an_older_schema_as_it_is_and_opening_migrates() {
     let dir = repose_testkit::scratch_dir("repose-backup-schema");
     let file = dir.join("old.db");
     let url = format!("sqlite://{}?mode=rwc", file.display());
-    let migrator = migrations_up_to(7, &dir).await;
+    let migrator = repose_testkit::migrations_up_to(7, &dir).await;
     let pool = sqlx::AnyPool::connect(&url).await.unwrap();
     migrator.run(&pool).await.unwrap();
     sqlx::query(

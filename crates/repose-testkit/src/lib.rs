@@ -1,12 +1,12 @@
 //! Test support shared by the crates' and the workspace's tests: scratch
-//! stores on SQLite and PostgreSQL.
+//! stores on SQLite and PostgreSQL, and the schema of an earlier version.
 //!
 //! PostgreSQL is the server named by `REPOSE_TEST_POSTGRES` (by default
 //! `postgres://postgres@127.0.0.1:5432`, trust auth). Outside CI a test
 //! without a server skips its PostgreSQL half with a line on stderr; in CI
 //! (`CI=true`) a missing server fails the test.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use repose_store::{ScratchDatabase, Store};
 
@@ -55,4 +55,26 @@ pub async fn sqlite(prefix: &str) -> Store {
     Store::open(&format!("sqlite://{}", file.display()))
         .await
         .expect("a fresh SQLite store opens")
+}
+
+/// A migrator holding the project's migrations up to and including
+/// version `last` (copied into `dir`): the schema an earlier version left.
+pub async fn migrations_up_to(last: i64, dir: &Path) -> sqlx::migrate::Migrator {
+    let source = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../migrations");
+    let old = dir.join(format!("migrations-{last:04}"));
+    std::fs::create_dir_all(&old).expect("the scratch folder is writable");
+    for entry in std::fs::read_dir(&source).expect("the migrations folder") {
+        let path = entry.expect("a migration").path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        let version: Option<i64> = name.get(..4).and_then(|v| v.parse().ok());
+        if version.is_some_and(|v| v <= last) {
+            std::fs::copy(&path, old.join(name)).expect("a migration copies");
+        }
+    }
+    sqlx::migrate::Migrator::new(old)
+        .await
+        .expect("the migrations read")
 }
