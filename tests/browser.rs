@@ -638,36 +638,7 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
         ("regime", 0),
     ];
     for (fig, fits) in expected {
-        tab.visit(&format!("/paper/ep21/figure/{fig}"));
-        wait_for(
-            tab,
-            &format!("ep21 figure {fig}"),
-            "document.querySelector('#figure-plot svg') && document.querySelectorAll('#figure-plot svg circle.mean').length",
-        );
-        let served = tab.evaluate(&format!(
-            "(async () => {{ const f = await (await fetch('/api/studies/ep21/figures/{fig}')).json(); \
-             return [f.fits.length, f.fits.filter(x => x.fit).length, \
-             f.series.filter(s => s.kind === 'measured').flatMap(s => s.points).filter(p => p.flag && Number.isFinite(p.y)).length]; }})()"
-        ));
-        let n = |k: usize| served[k].as_u64().unwrap();
-        assert!(n(0) >= fits, "figure {fig}: {served}");
-        assert_eq!(count(tab, "#fits tbody tr"), n(0), "figure {fig}");
-        assert_eq!(
-            count(tab, "#fits tbody tr.failed"),
-            n(0) - n(1),
-            "figure {fig}"
-        );
-        assert_eq!(
-            count(tab, "#figure-plot svg polyline.fit"),
-            n(1),
-            "figure {fig}"
-        );
-        assert_eq!(
-            count(tab, "#figure-plot svg circle.flagged"),
-            n(2),
-            "figure {fig}"
-        );
-        tab.screenshot(&format!("ep21-figure-{fig}.png"));
+        ep21_figure(tab, fig, fits);
     }
     let (heap, packing) = rt.block_on(async {
         (
@@ -675,7 +646,75 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
             study_sample(server, "ep21/packing", "bed_height").await,
         )
     });
-    let heap = heap.expect("a completed heap in the reduced study");
+    ep21_heap(tab, &heap.expect("a completed heap in the reduced study"));
+
+    let packing = packing.expect("a completed packing in the reduced study");
+    tab.visit(&format!("/sample/{packing}"));
+    wait_for(
+        tab,
+        "the sub-columns",
+        "document.querySelectorAll('#quarters tr').length",
+    );
+    assert_eq!(count(tab, "#quarters tr"), 4);
+    assert_eq!(count(tab, "#series-phi_z svg polyline.trace"), 1);
+    tab.screenshot("ep21-packing.png");
+
+    // The paper's reproduction report, linked from the papers page.
+    tab.visit("/papers");
+    let link = wait_for(
+        tab,
+        "the report link",
+        "document.querySelector('[data-paper=\"ep21\"] a.report') && document.querySelector('[data-paper=\"ep21\"] a.report').getAttribute('href')",
+    );
+    assert_eq!(link, "#/doc/reproduction-ep21");
+    tab.visit("/doc/reproduction-ep21");
+    wait_for(
+        tab,
+        "the second paper's report",
+        "document.querySelector('.doc') && document.querySelector('.doc').textContent.includes('Reproduction of Elekes')",
+    );
+    assert!(count(tab, ".doc img") >= 7, "the report's figures");
+    tab.screenshot("ep21-report.png");
+}
+
+/// One figure of the second paper: its means, and as many fits (at least
+/// `fits`), failed fits, fitted curves and flagged points as the API serves.
+fn ep21_figure(tab: &mut Page, fig: &str, fits: u64) {
+    tab.visit(&format!("/paper/ep21/figure/{fig}"));
+    wait_for(
+        tab,
+        &format!("ep21 figure {fig}"),
+        "document.querySelector('#figure-plot svg') && document.querySelectorAll('#figure-plot svg circle.mean').length",
+    );
+    let served = tab.evaluate(&format!(
+        "(async () => {{ const f = await (await fetch('/api/studies/ep21/figures/{fig}')).json(); \
+         return [f.fits.length, f.fits.filter(x => x.fit).length, \
+         f.series.filter(s => s.kind === 'measured').flatMap(s => s.points).filter(p => p.flag && Number.isFinite(p.y)).length]; }})()"
+    ));
+    let n = |k: usize| served[k].as_u64().unwrap();
+    assert!(n(0) >= fits, "figure {fig}: {served}");
+    assert_eq!(count(tab, "#fits tbody tr"), n(0), "figure {fig}");
+    assert_eq!(
+        count(tab, "#fits tbody tr.failed"),
+        n(0) - n(1),
+        "figure {fig}"
+    );
+    assert_eq!(
+        count(tab, "#figure-plot svg polyline.fit"),
+        n(1),
+        "figure {fig}"
+    );
+    assert_eq!(
+        count(tab, "#figure-plot svg circle.flagged"),
+        n(2),
+        "figure {fig}"
+    );
+    tab.screenshot(&format!("ep21-figure-{fig}.png"));
+}
+
+/// A heap of the second paper in 3D, turned by the arrow keys and drawn in
+/// colour, with its side views, their triangles and its pour history.
+fn ep21_heap(tab: &mut Page, heap: &str) {
     tab.visit(&format!("/sample/{heap}"));
     let drawn = wait_for(
         tab,
@@ -708,32 +747,4 @@ fn the_second_paper(tab: &mut Page, server: &Server, rt: &tokio::runtime::Runtim
     assert_eq!(count(tab, "#energy svg polyline.trace"), 1);
     assert_eq!(count(tab, "#series-heap_grains svg polyline.trace"), 1);
     tab.screenshot("ep21-heap.png");
-
-    let packing = packing.expect("a completed packing in the reduced study");
-    tab.visit(&format!("/sample/{packing}"));
-    wait_for(
-        tab,
-        "the sub-columns",
-        "document.querySelectorAll('#quarters tr').length",
-    );
-    assert_eq!(count(tab, "#quarters tr"), 4);
-    assert_eq!(count(tab, "#series-phi_z svg polyline.trace"), 1);
-    tab.screenshot("ep21-packing.png");
-
-    // The paper's reproduction report, linked from the papers page.
-    tab.visit("/papers");
-    let link = wait_for(
-        tab,
-        "the report link",
-        "document.querySelector('[data-paper=\"ep21\"] a.report') && document.querySelector('[data-paper=\"ep21\"] a.report').getAttribute('href')",
-    );
-    assert_eq!(link, "#/doc/reproduction-ep21");
-    tab.visit("/doc/reproduction-ep21");
-    wait_for(
-        tab,
-        "the second paper's report",
-        "document.querySelector('.doc') && document.querySelector('.doc').textContent.includes('Reproduction of Elekes')",
-    );
-    assert!(count(tab, ".doc img") >= 7, "the report's figures");
-    tab.screenshot("ep21-report.png");
 }

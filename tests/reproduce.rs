@@ -310,26 +310,7 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
             .stderr(std::process::Stdio::piped());
         c
     };
-    let first = command(&[]).spawn().expect("repose reproduce starts");
-    let start = std::time::Instant::now();
-    while count(&store, "SELECT COUNT(*) FROM checkpoints").await == 0 {
-        assert!(start.elapsed().as_secs() < 120, "no checkpoint");
-        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
-    }
-    common::signal(&first, "TERM");
-    let stopped = tokio::task::spawn_blocking(|| first.wait_with_output())
-        .await
-        .unwrap()
-        .unwrap();
-    let said = String::from_utf8_lossy(&stopped.stderr);
-    assert!(!stopped.status.success(), "{said}");
-    assert!(
-        said.contains("stopped: the running samples go back"),
-        "{said}"
-    );
-    let running = "SELECT COUNT(*) FROM jobs WHERE state = 'running'";
-    assert_eq!(count(&store, running).await, 0, "handed back: {said}");
-    assert!(count(&store, "SELECT COUNT(*) FROM checkpoints").await > 0);
+    stop_at_the_first_checkpoint(&store, command(&[])).await;
 
     // An interim report runs nothing and says what is left.
     let results = count(&store, "SELECT COUNT(*) FROM results").await;
@@ -351,8 +332,46 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
     let said = String::from_utf8_lossy(&again.stderr);
     assert!(again.status.success(), "{said}");
     assert!(said.contains("continuing from the checkpoint"), "{said}");
-    // Its workers started once its sweeps were queued: the first samples
-    // they claimed are its cheapest, none of what the first run left.
+    first_claims_are_the_new_runs_cheapest(&store, &said).await;
+    let open = "SELECT COUNT(*) FROM jobs WHERE state <> 'done'";
+    assert_eq!(count(&store, open).await, 0);
+    let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM results").await, samples);
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM checkpoints").await, 0);
+    let report = std::fs::read_to_string(&out).expect("the report is written");
+    assert!(report.contains("Wall time of this run"), "{report}");
+    assert!(!report.contains("Interim report"), "{report}");
+}
+
+/// Starts `command`, stops it with SIGTERM once it has saved a checkpoint,
+/// and checks that it handed its running samples back.
+async fn stop_at_the_first_checkpoint(store: &repose_store::Store, mut command: Command) {
+    let first = command.spawn().expect("repose reproduce starts");
+    let start = std::time::Instant::now();
+    while count(store, "SELECT COUNT(*) FROM checkpoints").await == 0 {
+        assert!(start.elapsed().as_secs() < 120, "no checkpoint");
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    common::signal(&first, "TERM");
+    let stopped = tokio::task::spawn_blocking(|| first.wait_with_output())
+        .await
+        .unwrap()
+        .unwrap();
+    let said = String::from_utf8_lossy(&stopped.stderr);
+    assert!(!stopped.status.success(), "{said}");
+    assert!(
+        said.contains("stopped: the running samples go back"),
+        "{said}"
+    );
+    let running = "SELECT COUNT(*) FROM jobs WHERE state = 'running'";
+    assert_eq!(count(store, running).await, 0, "handed back: {said}");
+    assert!(count(store, "SELECT COUNT(*) FROM checkpoints").await > 0);
+}
+
+/// The workers of a run started once its sweeps were queued: the first
+/// samples they claimed (in the log `said`) are its cheapest, none of what
+/// an earlier run left.
+async fn first_claims_are_the_new_runs_cheapest(store: &repose_store::Store, said: &str) {
     let claims: Vec<String> = said
         .lines()
         .filter(|l| l.contains(" claimed "))
@@ -391,14 +410,6 @@ async fn a_stopped_reproduction_goes_on_where_it_stopped() {
         first.push(seq == lowest);
     }
     assert!(first.contains(&true), "{said}");
-    let open = "SELECT COUNT(*) FROM jobs WHERE state <> 'done'";
-    assert_eq!(count(&store, open).await, 0);
-    let samples = count(&store, "SELECT COUNT(DISTINCT sample_hash) FROM jobs").await;
-    assert_eq!(count(&store, "SELECT COUNT(*) FROM results").await, samples);
-    assert_eq!(count(&store, "SELECT COUNT(*) FROM checkpoints").await, 0);
-    let report = std::fs::read_to_string(&out).expect("the report is written");
-    assert!(report.contains("Wall time of this run"), "{report}");
-    assert!(!report.contains("Interim report"), "{report}");
 }
 
 /// `--first` queues the named points of each sweep that has them as a
