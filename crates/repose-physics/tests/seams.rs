@@ -113,6 +113,10 @@ where
         }
     }
 
+    fn at_contact(&self, _r_eff: f64) -> f64 {
+        self.force
+    }
+
     fn work(&self, _r_eff: f64, depth: f64) -> f64 {
         self.force * (self.range + depth)
     }

@@ -100,6 +100,10 @@ where
         self.at(touch.r_eff, -touch.overlap)
     }
 
+    fn at_contact(&self, r_eff: f64) -> f64 {
+        self.at(r_eff, 0.0)
+    }
+
     #[inline(always)]
     fn limit_load(&self, attraction: f64, repulsion: f64) -> f64 {
         match self.limits {

@@ -182,6 +182,11 @@ where
     /// Size of the attraction (pulling `i` towards `j`) for this pair.
     fn attraction(&self, touch: &Touch<D>) -> f64;
 
+    /// The attraction of a pair of effective radius `r_eff` just touching
+    /// (no gap, no overlap), N: what sets the time an attraction takes to
+    /// kick a pair, which bounds the time step of a cohesive scene.
+    fn at_contact(&self, r_eff: f64) -> f64;
+
     /// Work the attraction does on a pair of effective radius `r_eff`
     /// brought from out of its range to an overlap `depth`.
     fn work(&self, r_eff: f64, depth: f64) -> f64;
@@ -235,6 +240,10 @@ where
 
     #[inline(always)]
     fn attraction(&self, _: &Touch<D>) -> f64 {
+        0.0
+    }
+
+    fn at_contact(&self, _: f64) -> f64 {
         0.0
     }
 

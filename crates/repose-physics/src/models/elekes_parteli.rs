@@ -177,6 +177,21 @@ trait CohesionJob {
     fn run<C: CohesionLaw<3> + Build<Parts>>(self) -> Self::Output;
 }
 
+/// The attraction of two surfaces `surfaces` of effective radius `r_eff`
+/// just touching, by the cohesion law a scene selects.
+struct PullAtContact {
+    surfaces: Cohesive,
+    r_eff: f64,
+}
+
+impl CohesionJob for PullAtContact {
+    type Output = f64;
+
+    fn run<C: CohesionLaw<3> + Build<Parts>>(self) -> f64 {
+        C::of(&self.surfaces).at_contact(self.r_eff)
+    }
+}
+
 /// What the Coulomb limit caps while a contact slides.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -791,8 +806,8 @@ impl Model for ElekesParteli {
     }
 
     /// `m_eff √(g d) / F_0` of the smallest grains, with `F_0` the
-    /// attraction of two of them touching (`π γ d` as simulated), read off
-    /// the law the engine applies.
+    /// attraction of two of them touching (`π γ d` for van der Waals as
+    /// simulated), read off the law the scene selects.
     fn attraction_time(&self, scene: &Scene) -> Option<f64> {
         let (grains, m) = material(scene).ok()?;
         let g = scene.gravity_magnitude();
@@ -802,8 +817,14 @@ impl Model for ElekesParteli {
         let d = grains.diameter_range().0;
         let pair = Kind::pair(&grains, d);
         let surfaces = Parts::new(&m, 0.0, true).cohesion;
-        let pull = <VanDerWaals as CohesionLaw<3>>::of(&surfaces).at(pair.r_eff, 0.0);
-        Some(pair.m_eff * (g * d).sqrt() / pull)
+        let pull = with_cohesion(
+            m.cohesion_law(),
+            PullAtContact {
+                surfaces,
+                r_eff: pair.r_eff,
+            },
+        );
+        (pull > 0.0).then(|| pair.m_eff * (g * d).sqrt() / pull)
     }
 
     fn density(&self, scene: &Scene) -> f64 {
