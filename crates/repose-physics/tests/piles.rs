@@ -190,3 +190,30 @@ fn failures_end_with_an_outcome_that_says_why() {
     );
     assert!(r.metric("theta_t").is_none() && r.metric("theta_r").is_some());
 }
+
+#[test]
+fn a_listed_grain_keeps_its_load_in_the_box_protocols() {
+    let text = "protocol = \"fill_release\"\n\
+                [[particles]]\nposition = [1.0, 0.1]\nradius = 0.1\n\
+                [[particles]]\nposition = [1.5, 0.1]\nradius = 0.1\nload = [250.0, -40.0]\n";
+    let s = Scene::from_toml(text, &[]).expect("valid scene");
+    let grains = repose_physics::protocols::pile::listed_grains(&s, 2.5);
+    assert_eq!(grains.len(), 2);
+    assert_eq!(
+        grains.load.len(),
+        2,
+        "one load a grain once any grain has one"
+    );
+    assert_eq!((grains.load[0].x, grains.load[0].y), (0.0, 0.0));
+    assert_eq!((grains.load[1].x, grains.load[1].y), (250.0, -40.0));
+    let unloaded = Scene::from_toml(
+        "protocol = \"fill_release\"\n[[particles]]\nposition = [1.0, 0.1]\nradius = 0.1\n",
+        &[],
+    )
+    .unwrap();
+    assert!(
+        repose_physics::protocols::pile::listed_grains(&unloaded, 2.5)
+            .load
+            .is_empty()
+    );
+}

@@ -15,7 +15,7 @@ use crate::theory;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
 use repose_engine::integrate::Integrator;
-use repose_engine::particles::Particles;
+use repose_engine::particles::{vector_from, Particles};
 use repose_engine::simulation::{Outlet, Simulation};
 use repose_engine::walls::{Limit, Wall};
 use serde::{Deserialize, Serialize};
@@ -278,7 +278,9 @@ impl PileSpec {
     }
 }
 
-/// The listed grains of a scene, or none.
+/// The listed grains of a scene, or none, each with its load (the scene's
+/// checks have refused a vector of the wrong length; the grains of these
+/// protocols do not turn, so an angular velocity is not theirs).
 pub fn listed_grains(scene: &Scene, density: f64) -> Particles<2> {
     let mut particles = Particles::<2>::default();
     for g in &scene.particles {
@@ -286,6 +288,9 @@ pub fn listed_grains(scene: &Scene, density: f64) -> Particles<2> {
             continue;
         };
         particles.push_with_id(g.id, x, v, g.radius, sphere_mass(density, g.radius));
+        if let Some(load) = vector_from::<2>(&g.load) {
+            particles.set_load(particles.len() - 1, load);
+        }
     }
     particles.make_ids_unique();
     particles
