@@ -94,6 +94,12 @@ impl ServeArgs {
     }
 }
 
+/// Longest lease and checkpoint interval a worker takes: a day.
+const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
+
+/// Shortest heartbeat a worker takes.
+const MIN_HEARTBEAT: Duration = Duration::from_millis(1);
+
 fn seconds(flag: &str, value: f64) -> anyhow::Result<Duration> {
     Duration::try_from_secs_f64(value)
         .ok()
@@ -143,17 +149,32 @@ impl Default for LeaseArgs {
 
 impl LeaseArgs {
     pub(crate) fn config(&self, owner: String) -> anyhow::Result<WorkerConfig> {
-        if !(self.lease > 0.0 && self.heartbeat > 0.0 && self.heartbeat < self.lease) {
-            bail!("--heartbeat must be positive and shorter than --lease");
+        let lease = seconds("--lease", self.lease)?;
+        let heartbeat = seconds("--heartbeat", self.heartbeat)?;
+        if lease > MAX_INTERVAL {
+            bail!("--lease must be at most {} s", MAX_INTERVAL.as_secs());
         }
-        if !(self.checkpoint_every >= 0.0 && self.checkpoint_every.is_finite()) {
-            bail!("--checkpoint-every must be a number of seconds, 0 or more");
+        if heartbeat < MIN_HEARTBEAT || heartbeat >= lease {
+            bail!(
+                "--heartbeat must be at least {} s and shorter than --lease",
+                MIN_HEARTBEAT.as_secs_f64()
+            );
+        }
+        let checkpoint_every = if self.checkpoint_every == 0.0 {
+            None
+        } else {
+            Some(seconds("--checkpoint-every", self.checkpoint_every)?)
+        };
+        if checkpoint_every.is_some_and(|every| every > MAX_INTERVAL) {
+            bail!(
+                "--checkpoint-every must be 0 (never) or at most {} s",
+                MAX_INTERVAL.as_secs()
+            );
         }
         let mut c = WorkerConfig::new(owner);
-        c.lease = Duration::from_secs_f64(self.lease);
-        c.heartbeat = Duration::from_secs_f64(self.heartbeat);
-        c.checkpoint_every =
-            (self.checkpoint_every > 0.0).then(|| Duration::from_secs_f64(self.checkpoint_every));
+        c.lease = lease;
+        c.heartbeat = heartbeat;
+        c.checkpoint_every = checkpoint_every;
         Ok(c)
     }
 }
@@ -292,6 +313,7 @@ pub fn worker(args: WorkerArgs) -> anyhow::Result<ExitCode> {
     if args.threads == 0 {
         bail!("--threads must be at least 1");
     }
+    args.lease.config(String::new())?;
     runtime()?.block_on(async {
         let store = Store::open(&args.database)
             .await

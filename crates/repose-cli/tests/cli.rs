@@ -170,6 +170,38 @@ fn bad_input_names_the_field_and_exits_non_zero() {
 }
 
 #[test]
+fn a_workers_lease_heartbeat_and_checkpoints_are_refused_out_of_range() {
+    let dir = repose_testkit::scratch_dir("repose-worker-flags");
+    let db = format!("sqlite://{}", dir.join("w.db").display());
+    let cases: &[(&[&str], &str)] = &[
+        (&["--lease", "inf"], "--lease"),
+        (&["--lease", "1e20"], "--lease"),
+        (&["--lease=-5"], "--lease"),
+        (&["--heartbeat", "1e-10"], "--heartbeat"),
+        (&["--heartbeat", "90", "--lease", "60"], "--heartbeat"),
+        (&["--checkpoint-every", "1e20"], "--checkpoint-every"),
+        (&["--checkpoint-every", "nan"], "--checkpoint-every"),
+    ];
+    for (extra, flag) in cases {
+        let out = repose(
+            &[
+                &["worker", "--database", &db, "--exit-when-idle"][..],
+                extra,
+            ]
+            .concat(),
+        );
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(flag), "{extra:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    assert!(
+        !dir.join("w.db").exists(),
+        "refused before opening the store"
+    );
+}
+
+#[test]
 fn a_run_that_fails_says_why_and_exits_with_one() {
     // A forced step twice the contact time is refused before anything runs.
     let out = repose(&[

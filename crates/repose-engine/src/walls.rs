@@ -37,7 +37,7 @@ impl WallSpec {
     pub fn to_wall<const D: usize>(&self) -> Option<Wall<D>> {
         let point = vector_from::<D>(&self.point)?;
         let normal = vector_from::<D>(&self.normal)?;
-        (normal.norm() > 0.0).then(|| Wall {
+        (normal.norm() > 0.0 && normal.norm().is_finite()).then(|| Wall {
             point,
             normal: normal.normalize(),
             limits: self.limits.clone(),

@@ -307,12 +307,14 @@ pub fn upgrade(report: Value) -> Value {
     if let Some(v) = theory["tilting"].as_f64() {
         quantities.push(json!({"name": "theta_t_eq4", "label": "θ_T by eq. (4)", "value": v}));
     }
-    let profiles = match r.remove("surface").filter(|v| !v.is_null()) {
-        Some(mut s) => {
-            s["axis"] = json!(0);
-            vec![s]
+    let profiles = match r.remove("surface") {
+        Some(Value::Object(mut s)) => {
+            s.insert("axis".into(), json!(0));
+            vec![Value::Object(s)]
         }
-        None => Vec::new(),
+        Some(Value::Null) | None => Vec::new(),
+        // Not a profile this build wrote: kept as it is, with no axis.
+        Some(other) => vec![other],
     };
     if let Some(Value::Object(o)) = r.get_mut("options") {
         let mut physics = Map::new();
@@ -332,4 +334,23 @@ pub fn upgrade(report: Value) -> Value {
     r.insert("profiles".into(), Value::Array(profiles));
     r.insert("details".into(), Value::Object(details));
     Value::Object(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_old_reports_surface_becomes_a_profile_whatever_its_shape() {
+        let profile = upgrade(json!({ "surface": { "heights": [1.0, 2.0] } }));
+        assert_eq!(
+            profile["profiles"],
+            json!([{ "heights": [1.0, 2.0], "axis": 0 }])
+        );
+        // A surface no build wrote (a number) is kept as it is, not a panic.
+        let odd = upgrade(json!({ "surface": 3.5 }));
+        assert_eq!(odd["profiles"], json!([3.5]));
+        let none = upgrade(json!({ "surface": null }));
+        assert_eq!(none["profiles"], json!([]));
+    }
 }

@@ -316,3 +316,38 @@ fn the_energy_guard_fails_a_run_that_gains_energy_from_nowhere() {
     assert!(message.contains("energy blow-up"), "{message}");
     assert!(message.contains("2.000e0 erg"), "{message}");
 }
+
+/// The fields a scene is refused for.
+fn refused_fields(text: &str, overrides: &[&str]) -> Vec<String> {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    let err = Scene::from_toml(text, &o).expect_err("refused");
+    err.errors.iter().map(|e| e.field.clone()).collect()
+}
+
+#[test]
+fn steps_far_below_the_contact_time_and_unbounded_domains_are_refused() {
+    let t_c = scene(SMALL, &[]).contact_time();
+    // The finest step taken is t_c/10⁴: just above it runs, just below is refused.
+    assert!(Scene::from_toml(SMALL, &[format!("numerics.dt={}", 1.01e-4 * t_c)]).is_ok());
+    let fine = format!("numerics.dt={}", 0.99e-4 * t_c);
+    assert_eq!(refused_fields(SMALL, &[&fine]), ["numerics.dt"]);
+    assert_eq!(
+        refused_fields(SMALL, &["numerics.dt_factor=1e-6"]),
+        ["numerics.dt_factor"]
+    );
+    // A box a hundred thousand of its largest grains wide (0.26 cm here) at most.
+    let wide = Scene::from_toml(SMALL, &["box.width=25000.0".into(), "box.grains=10".into()]);
+    assert!(wide.is_ok(), "{:?}", wide.err());
+    assert_eq!(
+        refused_fields(SMALL, &["box.width=1e9", "box.grains=10"]),
+        ["box.width"]
+    );
+    // Listed grains: ids below the grain limit, walls whose length is a number.
+    let listed = "protocol = \"free_run\"\nduration = 0.01\n\
+                  [[particles]]\nid = 4000000000\nposition = [0.8, 0.2]\nradius = 0.1\n\
+                  [[walls]]\npoint = [0.0, 0.0]\nnormal = [1e200, 1e200]\n";
+    assert_eq!(
+        refused_fields(listed, &[]),
+        ["particles[0].id", "walls[0].normal"]
+    );
+}

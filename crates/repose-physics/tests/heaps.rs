@@ -520,7 +520,8 @@ fn grains_at_rest_change_nothing_between_one_thread_and_two() {
 /// The options that cannot hold are refused, naming the field: grains at
 /// rest on the Gear integrator or put to rest in mid-flight, a
 /// restitution raised past 1 by softening too far, and a bound on the
-/// attraction's kick that is not a positive number.
+/// attraction's kick that is not a positive number or bounds the step below
+/// t_c/10⁴, and a plate or a domain too large to grid.
 #[test]
 fn options_that_cannot_hold_are_refused_by_field() {
     let refused = |extra: &[&str]| {
@@ -554,4 +555,19 @@ fn options_that_cannot_hold_are_refused_by_field() {
         let bad = refused(&[&format!("numerics.attraction_kick={kick}")]);
         assert_eq!(bad, vec!["numerics.attraction_kick".to_string()], "{kick}");
     }
+    // A kick so small that the step it bounds falls below t_c/10⁴.
+    let tiny = refused(&[
+        "material.surface_energy=0.05",
+        "numerics.attraction_kick=1e-9",
+    ]);
+    assert_eq!(tiny, vec!["numerics.attraction_kick".to_string()]);
+    // A plate or a domain of more than a thousand diameters.
+    assert_eq!(
+        refused(&["heap.plate=1e12"]),
+        vec!["heap.plate".to_string()]
+    );
+    assert_eq!(
+        refused(&["heap.height=1001"]),
+        vec!["heap.height".to_string()]
+    );
 }

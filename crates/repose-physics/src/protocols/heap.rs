@@ -11,6 +11,12 @@ use crate::models::{self, EngineJob, Laws};
 use crate::preset::Preset;
 use crate::report::{Curve, Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS};
+
+/// Longest side of the plate and the domain's height, in diameters: the
+/// heap's surface is measured on a grid of one column a diameter over the
+/// plate, so a side of a thousand makes a million columns (the paper's
+/// plate is 40).
+const MAX_SIDE: f64 = 1000.0;
 use crate::setup::Stream;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
@@ -104,6 +110,14 @@ impl Section for HeapSpec {
     fn check(&self, scene: &Scene, c: &mut Checks) {
         c.positive("heap.plate", self.plate);
         c.positive("heap.height", self.height);
+        for (field, value) in [("heap.plate", self.plate), ("heap.height", self.height)] {
+            if value > MAX_SIDE {
+                c.fail(
+                    field,
+                    format!("{value} d is more than the limit of {MAX_SIDE} d"),
+                );
+            }
+        }
         c.positive("heap.inlet_width", self.inlet_width);
         c.non_negative("heap.inlet_floor", self.inlet_floor);
         c.positive("heap.interval", self.interval);

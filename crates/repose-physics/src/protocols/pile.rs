@@ -9,7 +9,9 @@ use crate::models::lee_herrmann::GrainSpec;
 use crate::models::{self, EngineJob, Laws};
 use crate::preset::Preset;
 use crate::report::{Outcome, Phase, Quantity, RunReport};
-use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl, MAX_GRAINS, MAX_PACKING};
+use crate::scene::{
+    Checks, Scene, SceneError, Section, SectionDecl, MAX_EXTENT, MAX_GRAINS, MAX_PACKING,
+};
 use crate::setup::{random_column, sphere_mass, Stream};
 use crate::theory;
 use repose_engine::contact::ContactLaw;
@@ -83,6 +85,16 @@ impl BoxSpec {
                 "box.width",
                 format!(
                     "{} cm is narrower than the largest grain ({largest} cm)",
+                    self.width
+                ),
+            );
+            return;
+        }
+        if self.width > MAX_EXTENT * largest {
+            c.fail(
+                "box.width",
+                format!(
+                    "{} cm is wider than {MAX_EXTENT} of the largest grains ({largest} cm)",
                     self.width
                 ),
             );

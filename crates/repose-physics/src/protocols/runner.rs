@@ -121,6 +121,10 @@ where
     initial: usize,
 }
 
+/// Most steps between two checks: however long a scene's check interval,
+/// the observer is asked at least this often whether the run goes on.
+const MAX_CHECK_STEPS: u64 = 100_000_000;
+
 impl<'a, const D: usize, L: ContactLaw<D>, I: Integrator<D>> Runner<'a, D, L, I>
 where
     Dim<D>: Space<D>,
@@ -135,7 +139,7 @@ where
         check_interval: f64,
         extent: f64,
     ) -> Self {
-        let check_steps = ((check_interval / sim.dt).round() as u64).max(1);
+        let check_steps = ((check_interval / sim.dt).round() as u64).clamp(1, MAX_CHECK_STEPS);
         sim.set_energy_budget(extent);
         let initial = sim.particles.len();
         Runner {

@@ -11,7 +11,7 @@ use crate::preset::Preset;
 use crate::protocols::Protocol;
 use crate::scene::checks::path_error;
 use crate::scene::{
-    Checks, Core, Scene, SceneError, SectionDecl, Sections, CORE_KEYS, MAX_DT_FACTOR,
+    Checks, Core, Scene, SceneError, SectionDecl, Sections, CORE_KEYS, MAX_DT_FACTOR, MIN_DT_FACTOR,
 };
 use serde_json::Value;
 
@@ -130,8 +130,24 @@ impl Scene {
             );
             return;
         }
+        let t_c = self.contact_time();
+        if step < MIN_DT_FACTOR * t_c {
+            let field = if self.numerics.dt.is_some() {
+                "numerics.dt"
+            } else if step < self.numerics.dt_factor * t_c {
+                "numerics.attraction_kick"
+            } else {
+                "numerics.dt_factor"
+            };
+            c.fail(
+                field,
+                format!(
+                    "the step of {step:.3e} s is below {MIN_DT_FACTOR} of the stiffest contact's \
+                     duration t_c = {t_c:.3e} s: no finer step is needed, and its runs would not end"
+                ),
+            );
+        }
         if let Some(dt) = self.numerics.dt {
-            let t_c = self.contact_time();
             if dt > MAX_DT_FACTOR * t_c {
                 c.fail(
                     "numerics.dt",

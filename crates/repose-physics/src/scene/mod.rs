@@ -318,6 +318,15 @@ pub const MAX_PACKING: f64 = 0.9;
 /// Hard ceiling on grains per sample, to refuse absurd requests early.
 pub const MAX_GRAINS: usize = 1_000_000;
 
+/// Widest box of the pile protocols, in diameters of its largest grain:
+/// its surface and placement grids are one cell a grain across it.
+pub const MAX_EXTENT: f64 = 100_000.0;
+
+/// Shortest time step as a fraction of the stiffest contact's duration: a
+/// finer step buys no accuracy (the integrators converge well above it)
+/// and would make a run's steps unbounded.
+pub const MIN_DT_FACTOR: f64 = 1e-4;
+
 /// The largest time step accepted, as a fraction of the contact time. At
 /// half a contact time no integrator resolves a collision; steps between
 /// this and a few hundredths still run, and the engine's guards fail them
@@ -410,6 +419,12 @@ impl Scene {
         };
         for (i, p) in self.particles.iter().enumerate() {
             c.positive(&format!("particles[{i}].radius"), p.radius);
+            if p.id as usize >= MAX_GRAINS {
+                c.fail(
+                    &format!("particles[{i}].id"),
+                    format!("must be below the grain limit of {MAX_GRAINS}"),
+                );
+            }
             vector(c, format!("particles[{i}].position"), &p.position, false);
             vector(c, format!("particles[{i}].velocity"), &p.velocity, true);
             vector(c, format!("particles[{i}].load"), &p.load, true);
@@ -429,6 +444,12 @@ impl Scene {
             vector(c, format!("walls[{i}].normal"), &wall.normal, false);
             if wall.normal.iter().all(|x| *x == 0.0) {
                 c.fail(&format!("walls[{i}].normal"), "must not be the zero vector");
+            }
+            if !wall.normal.iter().map(|x| x * x).sum::<f64>().is_finite() {
+                c.fail(
+                    &format!("walls[{i}].normal"),
+                    "its length overflows: scale it down",
+                );
             }
             for (k, limit) in wall.limits.iter().enumerate() {
                 if limit.axis >= d {
