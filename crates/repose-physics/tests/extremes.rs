@@ -342,6 +342,12 @@ fn steps_far_below_the_contact_time_and_unbounded_domains_are_refused() {
         refused_fields(SMALL, &["box.width=1e9", "box.grains=10"]),
         ["box.width"]
     );
+    // A Verlet skin of at most ten of the largest grains' diameters.
+    assert!(Scene::from_toml(SMALL, &["numerics.skin=2.5".into()]).is_ok());
+    assert_eq!(
+        refused_fields(SMALL, &["numerics.skin=2.7"]),
+        ["numerics.skin"]
+    );
     // Listed grains: ids below the grain limit, walls whose length is a number.
     let listed = "protocol = \"free_run\"\nduration = 0.01\n\
                   [[particles]]\nid = 4000000000\nposition = [0.8, 0.2]\nradius = 0.1\n\

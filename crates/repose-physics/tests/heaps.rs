@@ -570,4 +570,6 @@ fn options_that_cannot_hold_are_refused_by_field() {
         refused(&["heap.height=1001"]),
         vec!["heap.height".to_string()]
     );
+    let skin = refused(&["numerics.skin=1"]);
+    assert_eq!(skin, vec!["numerics.skin".to_string()]);
 }

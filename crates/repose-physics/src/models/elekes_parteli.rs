@@ -767,6 +767,9 @@ impl Model for ElekesParteli {
     }
 
     fn check(&self, scene: &Scene, c: &mut Checks) {
+        if let Ok(grains) = scene.section::<Grains>() {
+            super::check_skin(scene, grains.diameter_range().1, c);
+        }
         let Ok(m) = scene.section::<Material>() else {
             return;
         };

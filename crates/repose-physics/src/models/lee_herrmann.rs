@@ -413,7 +413,11 @@ impl Model for LeeHerrmann {
         d
     }
 
-    fn check(&self, _scene: &Scene, _c: &mut Checks) {}
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        if let Ok(grains) = scene.section::<GrainSpec>() {
+            super::check_skin(scene, 2.0 * grains.largest(), c);
+        }
+    }
 
     fn resolve(&self, scene: &mut Scene) {
         let (Ok(contact), Ok(wall)) = (

@@ -113,6 +113,24 @@ where
     fn run<L: ContactLaw<D>, I: Integrator<D>>(self, laws: Laws<L>) -> Self::Output;
 }
 
+/// Widest Verlet skin, in diameters of the largest grain: a wider one lists
+/// pairs far out of reach, up to every pair of the scene.
+pub const MAX_SKIN: f64 = 10.0;
+
+/// Refuses a skin wider than [`MAX_SKIN`] diameters of the largest grain.
+pub fn check_skin(scene: &Scene, largest_diameter: f64, c: &mut Checks) {
+    let skin = scene.numerics.skin;
+    if skin > MAX_SKIN * largest_diameter {
+        c.fail(
+            "numerics.skin",
+            format!(
+                "{skin} is wider than {MAX_SKIN} diameters of the largest grain ({largest_diameter}): \
+                 the list would hold pairs far out of reach"
+            ),
+        );
+    }
+}
+
 /// The models that have a form in dimension `D`.
 pub trait Models<const D: usize>
 where
