@@ -342,6 +342,11 @@ fn steps_far_below_the_contact_time_and_unbounded_domains_are_refused() {
         refused_fields(SMALL, &["box.width=1e9", "box.grains=10"]),
         ["box.width"]
     );
+    // Checks at least once within the fill's and the flow's time caps.
+    assert_eq!(
+        refused_fields(SMALL, &["equilibrium.check_interval=1e9"]),
+        ["equilibrium.check_interval"]
+    );
     // A Verlet skin of at most ten of the largest grains' diameters.
     assert!(Scene::from_toml(SMALL, &["numerics.skin=2.5".into()]).is_ok());
     assert_eq!(

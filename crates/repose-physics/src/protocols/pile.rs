@@ -197,6 +197,16 @@ impl Section for Equilibrium {
         c.positive("equilibrium.check_interval", self.check_interval);
         c.positive("equilibrium.max_fill_time", self.max_fill_time);
         c.positive("equilibrium.max_flow_time", self.max_flow_time);
+        let cap = self.max_fill_time.min(self.max_flow_time);
+        if self.check_interval > cap {
+            c.fail(
+                "equilibrium.check_interval",
+                format!(
+                    "{} s is longer than the shorter time cap ({cap} s): the pile is checked at least once before it",
+                    self.check_interval
+                ),
+            );
+        }
     }
 }
 
