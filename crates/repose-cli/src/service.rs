@@ -268,6 +268,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         header_read: seconds("--header-timeout", args.header_timeout)?,
         ..Default::default()
     };
+    args.lease.config(String::new())?;
     runtime()?.block_on(async {
         let listener = tokio::net::TcpListener::bind(&args.listen)
             .await

@@ -195,6 +195,10 @@ fn a_workers_lease_heartbeat_and_checkpoints_are_refused_out_of_range() {
         assert!(stderr.contains(flag), "{extra:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+    // The server's embedded workers take the same flags, checked as early.
+    let out = repose(&["serve", "--database", &db, "--lease", "inf"]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("--lease"));
     assert!(
         !dir.join("w.db").exists(),
         "refused before opening the store"

@@ -312,9 +312,8 @@ pub fn upgrade(report: Value) -> Value {
             s.insert("axis".into(), json!(0));
             vec![Value::Object(s)]
         }
-        Some(Value::Null) | None => Vec::new(),
-        // Not a profile this build wrote: kept as it is, with no axis.
-        Some(other) => vec![other],
+        // Null, or not a profile any build wrote: no profile.
+        _ => Vec::new(),
     };
     if let Some(Value::Object(o)) = r.get_mut("options") {
         let mut physics = Map::new();
@@ -347,9 +346,9 @@ mod tests {
             profile["profiles"],
             json!([{ "heights": [1.0, 2.0], "axis": 0 }])
         );
-        // A surface no build wrote (a number) is kept as it is, not a panic.
+        // A surface no build wrote (a number) is no profile, and no panic.
         let odd = upgrade(json!({ "surface": 3.5 }));
-        assert_eq!(odd["profiles"], json!([3.5]));
+        assert_eq!(odd["profiles"], json!([]));
         let none = upgrade(json!({ "surface": null }));
         assert_eq!(none["profiles"], json!([]));
     }

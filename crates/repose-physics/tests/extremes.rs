@@ -347,10 +347,18 @@ fn steps_far_below_the_contact_time_and_unbounded_domains_are_refused() {
         refused_fields(SMALL, &["equilibrium.check_interval=1e9"]),
         ["equilibrium.check_interval"]
     );
-    // A Verlet skin of at most ten of the largest grains' diameters.
+    // A Verlet skin of at most ten of the largest grains' diameters, the
+    // listed grains' too.
     assert!(Scene::from_toml(SMALL, &["numerics.skin=2.5".into()]).is_ok());
     assert_eq!(
         refused_fields(SMALL, &["numerics.skin=2.7"]),
+        ["numerics.skin"]
+    );
+    let big = "protocol = \"free_run\"\nduration = 0.01\n\
+               [numerics]\nskin = 15.0\n[[particles]]\nposition = [0.0, 0.0]\nradius = 1.0\n";
+    assert!(Scene::from_toml(big, &[]).is_ok());
+    assert_eq!(
+        refused_fields(big, &["numerics.skin=25.0"]),
         ["numerics.skin"]
     );
     // Listed grains: ids below the grain limit, walls whose length is a number.

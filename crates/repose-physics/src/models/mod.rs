@@ -117,8 +117,11 @@ where
 /// pairs far out of reach, up to every pair of the scene.
 pub const MAX_SKIN: f64 = 10.0;
 
-/// Refuses a skin wider than [`MAX_SKIN`] diameters of the largest grain.
-pub fn check_skin(scene: &Scene, largest_diameter: f64, c: &mut Checks) {
+/// Refuses a skin wider than [`MAX_SKIN`] diameters of the largest grain,
+/// of the model's grains (`drawn`, their largest diameter) or the listed ones.
+pub fn check_skin(scene: &Scene, drawn: f64, c: &mut Checks) {
+    let listed = scene.particles.iter().map(|p| 2.0 * p.radius);
+    let largest_diameter = listed.fold(drawn, f64::max);
     let skin = scene.numerics.skin;
     if skin > MAX_SKIN * largest_diameter {
         c.fail(

@@ -11,12 +11,6 @@ use crate::models::{self, EngineJob, Laws};
 use crate::preset::Preset;
 use crate::report::{Curve, Outcome, Phase, RunReport};
 use crate::scene::{Checks, Scene, SceneError, Section, MAX_GRAINS};
-
-/// Longest side of the plate and the domain's height, in diameters: the
-/// heap's surface is measured on a grid of one column a diameter over the
-/// plate, so a side of a thousand makes a million columns (the paper's
-/// plate is 40).
-const MAX_SIDE: f64 = 1000.0;
 use crate::setup::Stream;
 use repose_engine::contact::ContactLaw;
 use repose_engine::dim::Vector;
@@ -25,6 +19,12 @@ use repose_engine::particles::Particles;
 use repose_engine::simulation::{Outlet, Simulation};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
+
+/// Longest side of the plate and the domain's height, in diameters: the
+/// heap's surface is measured on a grid of one column a diameter over the
+/// plate, so a side of a thousand makes a million columns (the paper's
+/// plate is 40).
+const MAX_SIDE: f64 = 1000.0;
 
 pub struct Heap;
 

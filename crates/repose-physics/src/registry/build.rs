@@ -134,10 +134,10 @@ impl Scene {
         if step < MIN_DT_FACTOR * t_c {
             let field = if self.numerics.dt.is_some() {
                 "numerics.dt"
-            } else if step < self.numerics.dt_factor * t_c {
-                "numerics.attraction_kick"
-            } else {
+            } else if self.numerics.dt_factor < MIN_DT_FACTOR {
                 "numerics.dt_factor"
+            } else {
+                "numerics.attraction_kick"
             };
             c.fail(
                 field,
