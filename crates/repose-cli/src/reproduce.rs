@@ -202,14 +202,14 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     // The workers start once this run's sweeps are queued, so that they
     // claim its samples by its priority and order, not what an earlier
     // run left in the queue.
-    args.lease.config(String::new())?;
+    let lease = args.lease.config(String::new())?;
     let (queued, mut queued_rx) = tokio::sync::watch::channel(false);
     let starter = {
-        let (store, lease, rx) = (store.clone(), args.lease.clone(), rx.clone());
+        let (store, rx) = (store.clone(), rx.clone());
         tokio::spawn(async move {
             match queued_rx.wait_for(|q| *q).await {
                 Ok(_) => spawn_workers(&store, workers, &lease, false, &rx),
-                Err(_) => Ok(Vec::new()),
+                Err(_) => Vec::new(),
             }
         })
     };
@@ -240,7 +240,7 @@ async fn with_own_server(args: &ReproduceArgs, papers: &[&Paper]) -> anyhow::Res
     };
     let _ = tx.send(true);
     drop(queued);
-    for h in starter.await??.into_iter() {
+    for h in starter.await?.into_iter() {
         let _ = h.await;
     }
     let _ = task.await;

@@ -238,26 +238,25 @@ fn owner_prefix() -> String {
     format!("{host}-{}", std::process::id())
 }
 
+/// Starts `count` workers on `store`, each with the lease settings of
+/// `base` (checked by [`LeaseArgs::config`]) under an owner name of its own.
 pub(crate) fn spawn_workers(
     store: &Store,
     count: usize,
-    lease: &LeaseArgs,
+    base: &WorkerConfig,
     exit_when_idle: bool,
     shutdown: &tokio::sync::watch::Receiver<bool>,
-) -> anyhow::Result<Vec<tokio::task::JoinHandle<Tally>>> {
+) -> Vec<tokio::task::JoinHandle<Tally>> {
     let prefix = owner_prefix();
     // One core a worker; one waiting for work lends its core to the others' samples.
     let cores = Cores::new(count);
     (0..count)
         .map(|k| {
-            let mut config = lease.config(format!("{prefix}-{k}"))?;
+            let mut config = base.clone();
+            config.owner = format!("{prefix}-{k}");
             config.exit_when_idle = exit_when_idle;
             config.cores = Some(cores.clone());
-            Ok(tokio::spawn(run_worker(
-                store.clone(),
-                config,
-                shutdown.clone(),
-            )))
+            tokio::spawn(run_worker(store.clone(), config, shutdown.clone()))
         })
         .collect()
 }
@@ -268,7 +267,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         header_read: seconds("--header-timeout", args.header_timeout)?,
         ..Default::default()
     };
-    args.lease.config(String::new())?;
+    let lease = args.lease.config(String::new())?;
     runtime()?.block_on(async {
         let listener = tokio::net::TcpListener::bind(&args.listen)
             .await
@@ -284,7 +283,7 @@ pub fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
                 .unwrap_or(1)
         });
         let shutdown = shutdown_on_signals();
-        let handles = spawn_workers(&store, workers, &args.lease, false, &shutdown)?;
+        let handles = spawn_workers(&store, workers, &lease, false, &shutdown);
         let guarded = if options.access.token.is_some() {
             ", token required to change"
         } else {
@@ -314,19 +313,13 @@ pub fn worker(args: WorkerArgs) -> anyhow::Result<ExitCode> {
     if args.threads == 0 {
         bail!("--threads must be at least 1");
     }
-    args.lease.config(String::new())?;
+    let lease = args.lease.config(String::new())?;
     runtime()?.block_on(async {
         let store = Store::open(&args.database)
             .await
             .with_context(|| format!("cannot open the database {}", args.database))?;
         let shutdown = shutdown_on_signals();
-        let handles = spawn_workers(
-            &store,
-            args.threads,
-            &args.lease,
-            args.exit_when_idle,
-            &shutdown,
-        )?;
+        let handles = spawn_workers(&store, args.threads, &lease, args.exit_when_idle, &shutdown);
         let mut total = Tally::default();
         for h in handles {
             let t = h.await?;

@@ -33,11 +33,13 @@ pub struct WallSpec {
 }
 
 impl WallSpec {
-    /// The engine's wall, if the vectors have `D` components and the normal is not zero.
+    /// The engine's wall, if the vectors have `D` components and the normal
+    /// has a length that is neither zero nor overflows.
     pub fn to_wall<const D: usize>(&self) -> Option<Wall<D>> {
         let point = vector_from::<D>(&self.point)?;
         let normal = vector_from::<D>(&self.normal)?;
-        (normal.norm() > 0.0 && normal.norm().is_finite()).then(|| Wall {
+        let length = normal.norm();
+        (length > 0.0 && length.is_finite()).then(|| Wall {
             point,
             normal: normal.normalize(),
             limits: self.limits.clone(),
