@@ -1,6 +1,8 @@
 //! Who may do what: a bearer token for everything that changes the store
 //! (creating, queueing, cancelling and retrying sweeps), and, on a private
-//! server, for reading results too.
+//! server, for reading results too. And, token or not, a change comes
+//! from this server's own page or from a program, never from another
+//! site's page in the user's browser ([`same_site`]).
 //!
 //! The server keeps only the SHA-256 digest of its token, compares the
 //! digest of the presented one in constant time, and never prints either:
@@ -9,6 +11,7 @@
 //! without one unless told to.
 
 use crate::{ApiError, AppState};
+use axum::body::HttpBody;
 use axum::extract::{Request, State};
 use axum::http::{header, Method, StatusCode};
 use axum::middleware::Next;
@@ -70,12 +73,74 @@ pub struct Access {
 
 impl Access {
     fn guards(&self, method: &Method, path: &str) -> bool {
-        let reads = matches!(*method, Method::GET | Method::HEAD | Method::OPTIONS);
-        if !reads {
+        if !reads(method) {
             return true;
         }
         self.private && path.starts_with("/api/") && path != "/api/health"
     }
+}
+
+/// Whether a request only reads.
+fn reads(method: &Method) -> bool {
+    matches!(*method, Method::GET | Method::HEAD | Method::OPTIONS)
+}
+
+/// Middleware against cross-site requests. A page of another site can
+/// make the user's browser post to a server on loopback, which has no
+/// token: a plain form or a `text/plain` body needs no permission from
+/// the server. So a change is refused with 403 when its `Origin` (which
+/// browsers send) names another host than the request's own (`Host`, or
+/// `X-Forwarded-Host` behind a proxy), and with 415 when it carries a body
+/// that is not declared JSON. Programs that send no `Origin` are unaffected.
+pub(crate) async fn same_site(req: Request, next: Next) -> Response {
+    if reads(req.method()) {
+        return next.run(req).await;
+    }
+    let headers = req.headers();
+    if let Some(origin) = headers.get(header::ORIGIN) {
+        let host = headers
+            .get("x-forwarded-host")
+            .or_else(|| headers.get(header::HOST))
+            .and_then(|v| v.to_str().ok());
+        let from = origin
+            .to_str()
+            .ok()
+            .and_then(|o| o.split_once("://"))
+            .map(|(_, a)| a);
+        let same = matches!((from, host), (Some(a), Some(h)) if a.eq_ignore_ascii_case(h.trim()));
+        if !same {
+            return ApiError::field(
+                StatusCode::FORBIDDEN,
+                "Origin",
+                format!(
+                    "a change from the page of another site ({}) is refused",
+                    origin.to_str().unwrap_or("?")
+                ),
+            )
+            .into_response();
+        }
+    }
+    let has_body = req.body().size_hint().upper() != Some(0);
+    let json = headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .map(|v| {
+            v.split(';')
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_ascii_lowercase()
+        })
+        .is_some_and(|t| t == "application/json" || t.ends_with("+json"));
+    if has_body && !json {
+        return ApiError::field(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "Content-Type",
+            "a request body is JSON: send it with Content-Type: application/json",
+        )
+        .into_response();
+    }
+    next.run(req).await
 }
 
 /// Middleware: answers 401 to a guarded request without the right

@@ -96,6 +96,7 @@ pub fn app_with(store: Store, options: Options) -> Router {
             state.clone(),
             access::check,
         ))
+        .layer(axum::middleware::from_fn(access::same_site))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
             options.request_timeout,
@@ -146,6 +147,7 @@ fn routes() -> Router<AppState> {
         )
         .route("/api/samples/{hash}", get(sweeps::sample_report))
         .fallback(not_found)
+        .method_not_allowed_fallback(method_not_allowed)
 }
 
 /// One field at fault.
@@ -395,6 +397,17 @@ async fn health(State(s): State<AppState>) -> ApiResult<Json<Health>> {
         engine: repose_physics::ENGINE.into(),
         database: backend_name(s.store.backend()),
     }))
+}
+
+/// A route asked with a method it does not take: 405 with the usual body.
+async fn method_not_allowed(method: axum::http::Method, uri: axum::http::Uri) -> ApiError {
+    ApiError::new(
+        StatusCode::METHOD_NOT_ALLOWED,
+        format!(
+            "{} does not take {method}; see /api/openapi.json",
+            uri.path()
+        ),
+    )
 }
 
 async fn not_found() -> ApiError {

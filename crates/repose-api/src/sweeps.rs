@@ -114,6 +114,15 @@ pub async fn create_sweep(
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
     let spec: SweepSpec = parse_body(&body?)?;
+    // A study's tag binds a sweep to a paper's figure; only queueing the
+    // study's own sweep (`POST /api/studies/...`) sets it.
+    if spec.study.is_some() {
+        return Err(ApiError::field(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "study",
+            "is set by the server when a paper's sweep is queued (POST /api/studies/{paper}/sweeps/{key}), not by a client",
+        ));
+    }
     enqueue(&s.store, &spec).await
 }
 

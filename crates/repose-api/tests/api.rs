@@ -690,3 +690,108 @@ async fn failed_jobs_are_queued_again_and_finished_ones_are_kept() {
     assert_eq!(status, StatusCode::CONFLICT);
     assert!(body["error"].as_str().unwrap().contains("cancelled"));
 }
+
+/// Sends a request with the given headers; returns the status and the body.
+async fn send(
+    store: &Store,
+    method: &str,
+    uri: &str,
+    headers: &[(&str, &str)],
+    body: Option<&str>,
+) -> (StatusCode, Value) {
+    let mut req = Request::builder().method(method).uri(uri);
+    for (k, v) in headers {
+        req = req.header(*k, *v);
+    }
+    let req = req
+        .body(
+            body.map(|b| Body::from(b.to_string()))
+                .unwrap_or_else(Body::empty),
+        )
+        .unwrap();
+    let resp = repose_api::app(store.clone()).oneshot(req).await.unwrap();
+    let status = resp.status();
+    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
+    (
+        status,
+        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
+    )
+}
+
+#[tokio::test]
+async fn another_sites_page_cannot_change_anything() {
+    let s = store().await;
+    let spec = json!({"protocol": "fill_release", "samples": 1}).to_string();
+    let json_type = ("content-type", "application/json");
+    let host = ("host", "127.0.0.1:8080");
+    // A page of another site posting through the user's browser.
+    let (status, body) = send(
+        &s,
+        "POST",
+        "/api/sweeps",
+        &[json_type, host, ("origin", "http://evil.example")],
+        Some(&spec),
+    )
+    .await;
+    assert_eq!(status, StatusCode::FORBIDDEN, "{body}");
+    assert_eq!(body["errors"][0]["field"], "Origin");
+    // The browser's form-like request: a text body needs no permission.
+    let (status, body) = send(
+        &s,
+        "POST",
+        "/api/sweeps",
+        &[("content-type", "text/plain"), host],
+        Some(&spec),
+    )
+    .await;
+    assert_eq!(status, StatusCode::UNSUPPORTED_MEDIA_TYPE, "{body}");
+    assert_eq!(body["errors"][0]["field"], "Content-Type");
+    // Nothing was queued by either.
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    assert_eq!(list["sweeps"].as_array().unwrap().len(), 0, "{list}");
+    // The server's own page (same host, behind a proxy too), and a program
+    // that sends no Origin, may.
+    for headers in [
+        vec![json_type, host, ("origin", "http://127.0.0.1:8080")],
+        vec![
+            json_type,
+            host,
+            ("x-forwarded-host", "repose.example"),
+            ("origin", "https://repose.example"),
+        ],
+        vec![json_type],
+    ] {
+        let (status, body) = send(&s, "POST", "/api/sweeps", &headers, Some(&spec)).await;
+        assert_eq!(status, StatusCode::CREATED, "{headers:?}: {body}");
+    }
+    // A change without a body needs no content type.
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    let id = list["sweeps"][0]["id"].as_str().unwrap().to_string();
+    let (status, body) = send(&s, "POST", &format!("/api/sweeps/{id}/cancel"), &[], None).await;
+    assert_eq!(status, StatusCode::OK, "{body}");
+    // Reading is never refused for its origin.
+    let (status, _) = send(
+        &s,
+        "GET",
+        "/api/sweeps",
+        &[("origin", "http://evil.example")],
+        None,
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+}
+
+#[tokio::test]
+async fn a_posted_sweep_cannot_take_a_papers_figure_and_wrong_methods_say_so() {
+    let s = store().await;
+    let spec =
+        json!({"protocol": "fill_release", "samples": 1, "study": "lh93/fig347"}).to_string();
+    let (status, body, _) = call(&s, "POST", "/api/sweeps", Some(&spec)).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{body}");
+    assert_eq!(body["errors"][0]["field"], "study");
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    assert_eq!(list["sweeps"].as_array().unwrap().len(), 0, "{list}");
+    let (status, body, _) = call(&s, "DELETE", "/api/health", None).await;
+    assert_eq!(status, StatusCode::METHOD_NOT_ALLOWED);
+    assert!(body["error"].as_str().unwrap().contains("DELETE"), "{body}");
+}

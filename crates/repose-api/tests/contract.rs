@@ -211,6 +211,10 @@ impl Gen {
         let mut out = Map::new();
         if let Some(props) = s["properties"].as_object() {
             for (name, p) in props {
+                // A read-only property is the server's to set, never a request's.
+                if self.resolve(p)["readOnly"] == json!(true) {
+                    continue;
+                }
                 if required.contains(&name.as_str()) || self.chance(50) {
                     out.insert(name.clone(), self.valid(p));
                 }
@@ -446,6 +450,11 @@ impl Gen {
                 }
                 if s["additionalProperties"] == json!(false) {
                     out.push(Break::Set(format!("{at}/unexpected_field"), json!(1)));
+                }
+                for (k, p) in s["properties"].as_object().into_iter().flatten() {
+                    if self.resolve(p)["readOnly"] == json!(true) {
+                        out.push(Break::Set(format!("{at}/{k}"), json!("set-by-a-client")));
+                    }
                 }
                 if s.get("propertyNames").is_some() {
                     for key in ["protocol", "seed", "preset", "a..b", UNLISTED] {

@@ -141,6 +141,9 @@ fn bad_input_names_the_field_and_exits_non_zero() {
         (&["--set", "contact.frobnicate=1"], "contact.frobnicate"),
         (&["--set", "contact.mu=\"high\""], "contact.mu"),
         (&["--set", "mu"], "mu"),
+        // A pile is built on its floor: gravity straight down, and not zero.
+        (&["--set", "gravity=[0, 0]"], "gravity"),
+        (&["--set", "gravity=[100, -981]"], "gravity"),
     ];
     for (extra, field) in cases {
         let mut args = vec!["run", "examples/fill_release.toml"];
@@ -154,6 +157,20 @@ fn bad_input_names_the_field_and_exits_non_zero() {
     let out = repose(&["run", "no/such/scene.toml"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("cannot read scene file"));
+    // A scene file may write nan and inf, which must not read as "not set"
+    // and so as the default.
+    let dir = repose_testkit::scratch_dir("cli-nan");
+    for (body, field) in [
+        ("[box]\nwidth = nan\n", "box.width"),
+        ("gravity = [0.0, -inf]\n", "gravity[1]"),
+    ] {
+        let file = dir.join("scene.toml");
+        std::fs::write(&file, format!("protocol = \"fill_release\"\n{body}")).unwrap();
+        let out = repose(&["run", file.to_str().unwrap()]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{body}: {stderr}");
+        assert!(stderr.contains(field), "{body}: {stderr}");
+    }
 
     // The studies refuse a bad override before running anything.
     let cases: &[(&[&str], &str)] = &[

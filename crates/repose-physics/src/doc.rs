@@ -39,7 +39,7 @@ pub fn parse(text: &str) -> Result<Doc, DocError> {
         let table: toml::Table = text
             .parse()
             .map_err(|e: toml::de::Error| DocError::new("(document)", e.to_string()))?;
-        serde_json::to_value(table).map_err(|e| DocError::new("(document)", e.to_string()))?
+        from_toml(toml::Value::Table(table), "")?
     };
     match drop_nulls(value) {
         Value::Object(doc) => Ok(doc),
@@ -61,12 +61,47 @@ pub fn parse_assignment(assignment: &str) -> Result<(String, Value), DocError> {
     check_path(key)?;
     let value = match format!("v = {raw}").parse::<toml::Table>() {
         Ok(mut t) => match t.remove("v") {
-            Some(v) => serde_json::to_value(v).unwrap_or(Value::String(raw.to_string())),
+            Some(v) => from_toml(v, key)?,
             None => Value::String(raw.to_string()),
         },
         Err(_) => Value::String(raw.to_string()),
     };
     Ok((key.to_string(), value))
+}
+
+/// A TOML value as JSON. TOML can write `nan` and `inf`, which JSON cannot
+/// hold (they would become null, read as "not set", and so quietly the
+/// default): they are refused, naming the path (`box.width`, `gravity[1]`).
+fn from_toml(value: toml::Value, path: &str) -> Result<Value, DocError> {
+    Ok(match value {
+        toml::Value::Float(x) if !x.is_finite() => {
+            return Err(DocError::new(
+                shown_key(path),
+                format!("{x} is not a finite number"),
+            ))
+        }
+        toml::Value::Table(t) => Value::Object(
+            t.into_iter()
+                .map(|(k, v)| {
+                    let inner = if path.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{path}.{k}")
+                    };
+                    Ok((k, from_toml(v, &inner)?))
+                })
+                .collect::<Result<Map<_, _>, DocError>>()?,
+        ),
+        toml::Value::Array(items) => Value::Array(
+            items
+                .into_iter()
+                .enumerate()
+                .map(|(i, v)| from_toml(v, &format!("{path}[{i}]")))
+                .collect::<Result<_, _>>()?,
+        ),
+        other => serde_json::to_value(other)
+            .map_err(|e| DocError::new(shown_key(path), e.to_string()))?,
+    })
 }
 
 fn check_path(key: &str) -> Result<(), DocError> {
@@ -204,6 +239,27 @@ mod tests {
             "contact.mu"
         );
         assert_eq!(parse_assignment("a..b=1").unwrap_err().field, "a..b");
+    }
+
+    #[test]
+    fn a_number_that_is_not_finite_is_refused_by_its_path() {
+        let err = parse("protocol = \"tilt\"\n[box]\nwidth = nan").unwrap_err();
+        assert_eq!(err.field, "box.width");
+        assert!(
+            err.message.contains("not a finite number"),
+            "{}",
+            err.message
+        );
+        let err = parse("gravity = [0.0, -inf]").unwrap_err();
+        assert_eq!(err.field, "gravity[1]");
+        let err =
+            parse("[[walls]]\nnormal = [0.0, 1.0]\n[[walls]]\nnormal = [+inf, 0.0]").unwrap_err();
+        assert_eq!(err.field, "walls[1].normal[0]");
+        let err = parse_assignment("contact.mu=inf").unwrap_err();
+        assert_eq!(err.field, "contact.mu");
+        // Finite numbers, and the words nan and inf as strings, still read.
+        assert_eq!(parse("w = 1e308").unwrap()["w"], json!(1e308));
+        assert_eq!(parse_assignment("a.b=\"nan\"").unwrap().1, json!("nan"));
     }
 
     #[test]

@@ -66,8 +66,10 @@ pub struct SweepSpec {
     #[serde(default, skip_serializing_if = "Order::is_listed")]
     pub order: Order,
     /// The study sweep this one queues (`paper/sweep`, e.g. `lh93/fig347`),
-    /// if it was queued from a paper's figures.
+    /// if it was queued from a paper's figures. Set by the server: a sweep
+    /// posted with it is refused.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(read_only)]
     pub study: Option<String>,
 }
 

@@ -23,6 +23,24 @@ pub mod tilt;
 pub use resume::Checkpoint;
 pub use runner::{Observer, Progress, Quiet};
 
+/// Gravity must point straight down the last axis (y in 2D, z in 3D): the
+/// piles and heaps are built on a floor across it and measured along it.
+pub fn check_gravity_down(scene: &Scene, c: &mut Checks) {
+    let Some((down, across)) = scene.gravity.split_last() else {
+        return;
+    };
+    if across.iter().any(|g| *g != 0.0) || *down >= 0.0 {
+        let (axis, form) = match across.len() {
+            1 => ("y", "[0, -g]"),
+            _ => ("z", "[0, 0, -g]"),
+        };
+        c.fail(
+            "gravity",
+            format!("must point down the {axis} axis, {form} with g > 0"),
+        );
+    }
+}
+
 use crate::preset::Preset;
 use crate::report::RunReport;
 use crate::scene::{Checks, Scene, SceneError, SectionDecl};

@@ -134,7 +134,8 @@ impl Section for BoxSpec {
     const ABOUT: &'static str =
         "the box: width, height (or aspect ratio) and how many grains fill it";
 
-    fn check(&self, _scene: &Scene, c: &mut Checks) {
+    fn check(&self, scene: &Scene, c: &mut Checks) {
+        super::check_gravity_down(scene, c);
         c.positive("box.width", self.width);
         c.positive("box.height", self.height);
         if let Some(a) = self.aspect {

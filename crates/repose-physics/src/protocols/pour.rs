@@ -257,18 +257,6 @@ pub fn fall_speed(scene: &Scene, height: f64) -> Option<f64> {
     Some((2.0 * scales.g * height).sqrt())
 }
 
-/// Gravity must point straight down the z axis.
-pub fn check_gravity_down(scene: &Scene, c: &mut Checks) {
-    if let [gx, gy, gz] = scene.gravity[..] {
-        if gx != 0.0 || gy != 0.0 || gz >= 0.0 {
-            c.fail(
-                "gravity",
-                "must point down the z axis, [0, 0, -g] with g > 0",
-            );
-        }
-    }
-}
-
 /// Random placement of spheres without overlap, with a hash grid of cells
 /// at least one largest diameter wide. Along periodic axes cells wrap, and
 /// distances are taken to the nearest image.
@@ -522,7 +510,7 @@ pub(super) fn check_fill_and_settling(c: &mut Checks, key: &str, fill: f64, sett
 
 /// The checks every 3D pouring protocol shares.
 pub fn check_scene(scene: &Scene, c: &mut Checks) {
-    check_gravity_down(scene, c);
+    super::check_gravity_down(scene, c);
     if scene.duration.is_some() {
         c.fail("duration", "only a free_run takes a fixed duration");
     }
