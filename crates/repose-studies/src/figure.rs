@@ -204,8 +204,8 @@ pub enum Layer {
         metric: &'static str,
         label: &'static str,
     },
-    /// A model fitted to the means of a metric along `x` (weighted by
-    /// their standard errors), one fit per value of `series`, over the
+    /// A model fitted to the means of a metric along `x` (weighted as
+    /// [`crate::fitted::weigh`] says), one fit per value of `series`, over the
     /// points `keep` accepts: the fitted curves and their constants.
     Fit {
         sweep: &'static str,
