@@ -25,6 +25,7 @@ mod bench;
 mod bench3d;
 mod bench_service;
 mod client;
+mod measure_heap;
 mod output;
 mod reproduce;
 mod service;
@@ -77,6 +78,8 @@ enum Command {
     Retry(admin::RetryArgs),
     /// Copy a live SQLite store to a new file, consistently.
     Backup(admin::BackupArgs),
+    /// Read a heap poured by another engine as the heap protocol reads its own.
+    MeasureHeap(measure_heap::MeasureHeapArgs),
 }
 
 #[derive(clap::Args)]
@@ -126,6 +129,7 @@ fn main() -> ExitCode {
         Command::Export(args) => service::export(args),
         Command::Retry(args) => admin::retry(args),
         Command::Backup(args) => admin::backup(args),
+        Command::MeasureHeap(args) => measure_heap::run(args),
     };
     match result {
         Ok(code) => code,

@@ -547,3 +547,68 @@ fn a_rewritten_report_takes_the_presets_bias_from_the_study_beside_it() {
     // The comparison is recomputed from the saved points, not dropped.
     assert!(md.contains("D_E (eq. 2 with α = ½)"), "{md}");
 }
+
+#[test]
+fn measure_heap_reads_a_heap_from_its_grains_as_the_protocol_read_it() {
+    // The reduced heap of softened grains (a few seconds), its final grains
+    // written as the table another engine's dump becomes, then read back:
+    // the same metrics to the bit.
+    let out = repose(&[
+        "run",
+        "examples/heap.toml",
+        "--set",
+        "heap.plate=20",
+        "--set",
+        "heap.max_grains=1500",
+        "--json",
+        "--state",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["outcome"]["status"], "completed", "{report}");
+    let grains = report["final_state"]["grains"].as_array().unwrap();
+    let table: String = grains
+        .iter()
+        .map(|g| {
+            let p: Vec<f64> = serde_json::from_value(g["position"].clone()).unwrap();
+            format!("{} {} {} {}\n", p[0], p[1], p[2], g["radius"])
+        })
+        .collect();
+    let file = repose_testkit::scratch_dir("measure-heap").join("grains.txt");
+    std::fs::write(&file, table).unwrap();
+    let path = file.to_str().unwrap();
+    let measured = repose(&[
+        "measure-heap",
+        path,
+        "--diameter",
+        "1e-3",
+        "--plate",
+        "20",
+        "--json",
+    ]);
+    assert!(measured.status.success(), "{}", text(&measured.stderr));
+    let metrics: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_slice(&measured.stdout).unwrap();
+    assert_eq!(metrics.len(), 8);
+    for (name, value) in &metrics {
+        assert_eq!(value, &report["metrics"][name], "{name}");
+    }
+    assert!(metrics["theta_r"].as_f64().unwrap() > 5.0);
+    // Bad input: a plate that is no positive number, and a file of no grains.
+    let bad = repose(&["measure-heap", path, "--diameter", "1e-3", "--plate", "-1"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(
+        text(&bad.stderr).contains("--plate"),
+        "{}",
+        text(&bad.stderr)
+    );
+    std::fs::write(&file, "# nothing\n").unwrap();
+    let empty = repose(&["measure-heap", path, "--diameter", "1e-3", "--plate", "20"]);
+    assert_eq!(empty.status.code(), Some(2));
+    assert!(
+        text(&empty.stderr).contains("no grains"),
+        "{}",
+        text(&empty.stderr)
+    );
+}

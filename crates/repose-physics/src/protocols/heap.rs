@@ -621,54 +621,96 @@ impl SideView {
 /// Samples per grain diameter of the silhouette a heap's angle is also read from.
 pub const SILHOUETTE_SAMPLES: usize = 20;
 
-/// The angle with the plate as base, mean of the two views, read from the
-/// silhouette of the grains rather than from their columns.
-fn silhouette_angle(p: &Particles<3>, spec: &HeapSpec, d: f64) -> f64 {
-    let half = 0.5 * spec.plate * d;
+/// The angle with the plate as base (`plate` in d), mean of the two views,
+/// read from the silhouette of the grains rather than from their columns.
+fn silhouette_angle(pos: &[Vector<3>], radius: &[f64], plate: f64, d: f64) -> f64 {
+    let half = 0.5 * plate * d;
     let views: Vec<f64> = (0..2)
-        .map(|axis| Profile::silhouette(&p.pos, &p.radius, axis, -half, half, SILHOUETTE_SAMPLES))
-        .filter_map(|pr| SideView::of(&pr, d, spec.plate))
+        .map(|axis| Profile::silhouette(pos, radius, axis, -half, half, SILHOUETTE_SAMPLES))
+        .filter_map(|pr| SideView::of(&pr, d, plate))
         .map(|v| v.theta_plate)
         .collect();
     views.iter().sum::<f64>() / views.len().max(1) as f64
 }
 
-/// The metrics of the settled heap, or why it cannot be measured.
-fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -> Outcome {
-    let half = 0.5 * spec.plate * d;
+/// What a settled heap's two side views read: the heap protocol's metrics
+/// in the order it reports them, the views and the column profiles.
+#[derive(Debug, Clone)]
+pub struct HeapReading {
+    pub metrics: Vec<(&'static str, f64)>,
+    pub views: [SideView; 2],
+    pub profiles: Vec<Profile>,
+}
+
+/// Reads a heap of grains (centres and radii in m, the plate at z = 0 and
+/// centred on the vertical axis, `plate` diameters `d` wide) as the heap
+/// protocol reads its own: the same metrics whatever engine poured it. Too
+/// few grains to make a heap is an error that says so.
+pub fn read_heap(
+    pos: &[Vector<3>],
+    radius: &[f64],
+    plate: f64,
+    d: f64,
+) -> Result<HeapReading, String> {
+    let half = 0.5 * plate * d;
     let profiles: Vec<Profile> = (0..2)
-        .map(|axis| Profile::measure(&p.pos, &p.radius, axis, -half, half))
+        .map(|axis| Profile::measure(pos, radius, axis, -half, half))
         .collect();
     let views: Vec<SideView> = profiles
         .iter()
-        .filter_map(|pr| SideView::of(pr, d, spec.plate))
+        .filter_map(|pr| SideView::of(pr, d, plate))
         .collect();
     let occupied = profiles[0].h.iter().filter(|h| **h > 0.0).count();
-    if views.len() < 2 || occupied < 3 {
-        return Outcome::Unmeasurable {
-            reason: format!(
-                "{} grains stayed on the plate, covering {occupied} columns: too few to measure a heap",
-                p.len()
-            ),
-        };
-    }
+    let [xz, yz]: [SideView; 2] = match views.try_into() {
+        Ok(pair) if occupied >= 3 => pair,
+        _ => {
+            return Err(format!(
+            "{} grains stayed on the plate, covering {occupied} columns: too few to measure a heap",
+            pos.len()
+        ))
+        }
+    };
     let mean_sd = |f: &dyn Fn(&SideView) -> f64| {
-        let (a, b) = (f(&views[0]), f(&views[1]));
+        let (a, b) = (f(&xz), f(&yz));
         (0.5 * (a + b), (a - b).abs() / std::f64::consts::SQRT_2)
     };
     let (theta, sd) = mean_sd(&|v| v.theta_plate);
-    findings.metric("theta_r", theta);
-    findings.metric("theta_r_sd", sd);
-    findings.metric("theta_r_footprint", mean_sd(&|v| v.theta_footprint).0);
-    findings.metric("theta_r_silhouette", silhouette_angle(p, spec, d));
-    findings.metric("heap_grains", p.len() as f64);
-    let top = (0..p.len())
-        .map(|i| p.pos[i].z + p.radius[i])
+    let top = pos
+        .iter()
+        .zip(radius)
+        .map(|(x, r)| x.z + r)
         .fold(0.0, f64::max);
-    findings.metric("heap_height", top / d);
-    findings.metric("surface_roughness", mean_sd(&|v| v.roughness).0);
-    findings.metric("edge_height", mean_sd(&|v| v.edge).0);
-    findings.details = json!({ "side_views": { "xz": views[0], "yz": views[1] } });
-    findings.profiles = profiles;
+    let metrics = vec![
+        ("theta_r", theta),
+        ("theta_r_sd", sd),
+        ("theta_r_footprint", mean_sd(&|v| v.theta_footprint).0),
+        (
+            "theta_r_silhouette",
+            silhouette_angle(pos, radius, plate, d),
+        ),
+        ("heap_grains", pos.len() as f64),
+        ("heap_height", top / d),
+        ("surface_roughness", mean_sd(&|v| v.roughness).0),
+        ("edge_height", mean_sd(&|v| v.edge).0),
+    ];
+    Ok(HeapReading {
+        metrics,
+        views: [xz, yz],
+        profiles,
+    })
+}
+
+/// The metrics of the settled heap, or why it cannot be measured.
+fn measure(p: &Particles<3>, spec: &HeapSpec, d: f64, findings: &mut Findings) -> Outcome {
+    let reading = match read_heap(&p.pos, &p.radius, spec.plate, d) {
+        Ok(reading) => reading,
+        Err(reason) => return Outcome::Unmeasurable { reason },
+    };
+    for (name, value) in reading.metrics {
+        findings.metric(name, value);
+    }
+    let [xz, yz] = reading.views;
+    findings.details = json!({ "side_views": { "xz": xz, "yz": yz } });
+    findings.profiles = reading.profiles;
     Outcome::Completed
 }
