@@ -18,10 +18,30 @@ async fn call(
     uri: &str,
     body: Option<&str>,
 ) -> (StatusCode, Value, String) {
-    let req = Request::builder()
-        .method(method)
-        .uri(uri)
-        .header("content-type", "application/json")
+    send(
+        store,
+        method,
+        uri,
+        &[("content-type", "application/json")],
+        body,
+    )
+    .await
+}
+
+/// Sends a request with the given headers; returns the status, the body
+/// as JSON (null if it is none) and as text.
+async fn send(
+    store: &Store,
+    method: &str,
+    uri: &str,
+    headers: &[(&str, &str)],
+    body: Option<&str>,
+) -> (StatusCode, Value, String) {
+    let mut req = Request::builder().method(method).uri(uri);
+    for (k, v) in headers {
+        req = req.header(*k, *v);
+    }
+    let req = req
         .body(
             body.map(|b| Body::from(b.to_string()))
                 .unwrap_or_else(Body::empty),
@@ -691,33 +711,6 @@ async fn failed_jobs_are_queued_again_and_finished_ones_are_kept() {
     assert!(body["error"].as_str().unwrap().contains("cancelled"));
 }
 
-/// Sends a request with the given headers; returns the status and the body.
-async fn send(
-    store: &Store,
-    method: &str,
-    uri: &str,
-    headers: &[(&str, &str)],
-    body: Option<&str>,
-) -> (StatusCode, Value) {
-    let mut req = Request::builder().method(method).uri(uri);
-    for (k, v) in headers {
-        req = req.header(*k, *v);
-    }
-    let req = req
-        .body(
-            body.map(|b| Body::from(b.to_string()))
-                .unwrap_or_else(Body::empty),
-        )
-        .unwrap();
-    let resp = repose_api::app(store.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (
-        status,
-        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
-    )
-}
-
 #[tokio::test]
 async fn another_sites_page_cannot_change_anything() {
     let s = store().await;
@@ -725,7 +718,7 @@ async fn another_sites_page_cannot_change_anything() {
     let json_type = ("content-type", "application/json");
     let host = ("host", "127.0.0.1:8080");
     // A page of another site posting through the user's browser.
-    let (status, body) = send(
+    let (status, body, _) = send(
         &s,
         "POST",
         "/api/sweeps",
@@ -736,7 +729,7 @@ async fn another_sites_page_cannot_change_anything() {
     assert_eq!(status, StatusCode::FORBIDDEN, "{body}");
     assert_eq!(body["errors"][0]["field"], "Origin");
     // The browser's form-like request: a text body needs no permission.
-    let (status, body) = send(
+    let (status, body, _) = send(
         &s,
         "POST",
         "/api/sweeps",
@@ -761,16 +754,16 @@ async fn another_sites_page_cannot_change_anything() {
         ],
         vec![json_type],
     ] {
-        let (status, body) = send(&s, "POST", "/api/sweeps", &headers, Some(&spec)).await;
+        let (status, body, _) = send(&s, "POST", "/api/sweeps", &headers, Some(&spec)).await;
         assert_eq!(status, StatusCode::CREATED, "{headers:?}: {body}");
     }
     // A change without a body needs no content type.
     let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
     let id = list["sweeps"][0]["id"].as_str().unwrap().to_string();
-    let (status, body) = send(&s, "POST", &format!("/api/sweeps/{id}/cancel"), &[], None).await;
+    let (status, body, _) = send(&s, "POST", &format!("/api/sweeps/{id}/cancel"), &[], None).await;
     assert_eq!(status, StatusCode::OK, "{body}");
     // Reading is never refused for its origin.
-    let (status, _) = send(
+    let (status, _, _) = send(
         &s,
         "GET",
         "/api/sweeps",

@@ -596,19 +596,22 @@ fn measure_heap_reads_a_heap_from_its_grains_as_the_protocol_read_it() {
     }
     assert!(metrics["theta_r"].as_f64().unwrap() > 5.0);
     // Bad input: a plate that is no positive number, and a file of no grains.
-    let bad = repose(&["measure-heap", path, "--diameter", "1e-3", "--plate", "-1"]);
-    assert_eq!(bad.status.code(), Some(2));
-    assert!(
-        text(&bad.stderr).contains("--plate"),
-        "{}",
-        text(&bad.stderr)
-    );
-    std::fs::write(&file, "# nothing\n").unwrap();
-    let empty = repose(&["measure-heap", path, "--diameter", "1e-3", "--plate", "20"]);
-    assert_eq!(empty.status.code(), Some(2));
-    assert!(
-        text(&empty.stderr).contains("no grains"),
-        "{}",
-        text(&empty.stderr)
-    );
+    let empty = file.with_file_name("empty.txt");
+    std::fs::write(&empty, "# nothing\n").unwrap();
+    for (grains, plate, said) in [
+        (path, "-1", "--plate"),
+        (empty.to_str().unwrap(), "20", "no grains"),
+    ] {
+        let out = repose(&[
+            "measure-heap",
+            grains,
+            "--diameter",
+            "1e-3",
+            "--plate",
+            plate,
+        ]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(said), "{stderr}");
+    }
 }

@@ -232,12 +232,13 @@ fn r_squared(problem: &Problem) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rand_chacha::rand_core::{RngCore, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    const LINE: Model = Model {
+    /// A straight line, `a + b x`, for the fits' tests.
+    pub(crate) const LINE: Model = Model {
         name: "line",
         params: &["a", "b"],
         f: |x, p| p[0] + p[1] * x,

@@ -199,12 +199,7 @@ pub fn fitted(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    static LINE: Model = Model {
-        name: "line",
-        params: &["a", "b"],
-        f: |x, p| p[0] + p[1] * x,
-    };
+    use crate::fit::tests::LINE;
 
     fn point(x: f64, y: f64, n: i64, sem: f64) -> (Datum, Aggregate) {
         let datum = Datum { x, y, sigma: None };
