@@ -36,7 +36,7 @@ mod topup;
 
 use serde::{Deserialize, Serialize};
 use sqlx::any::AnyPoolOptions;
-use sqlx::AnyPool;
+use sqlx::{AnyConnection, AnyPool, Connection};
 use std::collections::BTreeMap;
 use std::time::{SystemTime, UNIX_EPOCH};
 
@@ -223,6 +223,15 @@ impl Store {
                 } else {
                     format!("{url}?mode=rwc")
                 };
+                // A file that is no database fails every connection alike,
+                // and the pool would retry it until its acquire timeout
+                // (30 s) and then say only that it timed out: one plain
+                // connection reads the file first, and its error is final.
+                let mut probe = AnyConnection::connect(&url).await?;
+                sqlx::query("PRAGMA schema_version")
+                    .execute(&mut probe)
+                    .await?;
+                probe.close().await?;
                 AnyPoolOptions::new()
                     .max_connections(8)
                     .after_connect(|conn, _| {

@@ -50,3 +50,25 @@ async fn a_backup_leaves_an_older_schema_as_it_is_and_opening_migrates() {
     repose_store::Store::open(&url).await.unwrap();
     assert!(version(&url).await >= 8);
 }
+
+#[tokio::test]
+async fn a_file_that_is_no_database_is_named_as_such_at_once() {
+    // The pool alone retried such a file until its acquire timeout and
+    // then said only that it had timed out.
+    let file = repose_testkit::scratch_dir("repose-not-a-db").join("notes.db");
+    std::fs::write(&file, "these are notes, not a database\n".repeat(200)).unwrap();
+    let url = format!("sqlite://{}", file.display());
+    for opened in [
+        repose_store::Store::connect(&url).await,
+        repose_store::Store::open(&url).await,
+    ] {
+        let err = opened
+            .err()
+            .expect("no store opens on a text file")
+            .to_string();
+        assert!(err.contains("not a database"), "{err}");
+    }
+    // The file is left as it was.
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.starts_with("these are notes"));
+}
