@@ -62,10 +62,10 @@ async fn a_file_that_is_no_database_is_named_as_such_at_once() {
         repose_store::Store::connect(&url).await,
         repose_store::Store::open(&url).await,
     ] {
-        let err = opened
-            .err()
-            .expect("no store opens on a text file")
-            .to_string();
+        let Err(err) = opened else {
+            panic!("a store opened on a text file");
+        };
+        let err = err.to_string();
         assert!(err.contains("not a database"), "{err}");
     }
     // The file is left as it was.
