@@ -493,7 +493,7 @@ fn criteria_read_the_heaps_as_the_paper_reads_its_images() {
     // One heap without the silhouette's reading: every heap is judged by
     // its columns, and the 1 mm heap, 2° above eq. 1, fails.
     heaps.points[0].metrics.remove("theta_r_silhouette");
-    let rows = (ep21::PAPER.compare)(&study(heaps));
+    let rows = (ep21::PAPER.compare)(&study(heaps.clone()));
     let one_mm = row(&rows, "criterion: θ_r of 1 mm");
     assert_eq!(one_mm.verdict, "differs", "{one_mm:?}");
     assert!(
@@ -513,6 +513,21 @@ fn criteria_read_the_heaps_as_the_paper_reads_its_images() {
     );
     assert!(
         one_mm.reason.ends_with("where eq. 1 raises it by +1.83°"),
+        "{}",
+        one_mm.reason
+    );
+    // A dry level above the paper's (as the stated model's is) names what
+    // the paper's own engine gives; one below it does not.
+    assert!(!one_mm.reason.contains("LIGGGHTS"), "{}", one_mm.reason);
+    let mut high = study(heaps);
+    high.sweeps.insert("dry".into(), dry(26.3, 0.0));
+    let one_mm = row(&(ep21::PAPER.compare)(&high), "criterion: θ_r of 1 mm");
+    assert_eq!(one_mm.verdict, "differs", "{one_mm:?}");
+    assert!(
+        one_mm
+            .reason
+            .contains("stand at 26.26° read the same way, +2.18°")
+            && one_mm.reason.contains("LIGGGHTS, the paper's own engine"),
         "{}",
         one_mm.reason
     );
