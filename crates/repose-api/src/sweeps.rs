@@ -8,7 +8,9 @@ use axum::extract::{Path, Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use repose_store::{Aggregate, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo};
+use repose_store::{
+    Aggregate, Cancel, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo,
+};
 use repose_sweeps::SweepSpec;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -153,15 +155,19 @@ pub async fn show_sweep(
 
 /// Cancel a sweep: queued jobs are dropped, running ones stop at their next heartbeat.
 #[utoipa::path(post, path = "/api/sweeps/{id}/cancel", tag = "sweeps", params(("id" = String, Path)),
-    responses((status = 200, body = SweepInfo), (status = 404, body = ErrorBody)))]
+    responses((status = 200, body = SweepInfo), (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
 pub async fn cancel_sweep(
     State(s): State<AppState>,
     Path(id): Path<String>,
 ) -> ApiResult<Json<SweepInfo>> {
-    if !s.store.cancel_sweep(&id).await? {
-        return Err(ApiError::not_found("sweep"));
+    match s.store.cancel_sweep(&id).await? {
+        Cancel::Unknown => Err(ApiError::not_found("sweep")),
+        Cancel::Idle => Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "the sweep has nothing queued or running to cancel; it is left as it is",
+        )),
+        Cancel::Cancelled => Ok(Json(require_sweep(&s.store, &id).await?)),
     }
-    Ok(Json(require_sweep(&s.store, &id).await?))
 }
 
 /// What a retry queued again, and the sweep after it.

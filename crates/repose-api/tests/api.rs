@@ -155,6 +155,11 @@ async fn a_sweep_is_created_listed_shown_and_cancelled() {
     assert_eq!(status, StatusCode::OK);
     assert_eq!(cancelled["state"], "cancelled");
     assert_eq!(cancelled["progress"]["cancelled"], 6);
+    // Nothing is left to cancel: 409, and the sweep as it was.
+    let (status, err, _) = call(&s, "POST", &format!("/api/sweeps/{id}/cancel"), None).await;
+    assert_eq!(status, StatusCode::CONFLICT, "{err}");
+    let (_, shown, _) = call(&s, "GET", &format!("/api/sweeps/{id}"), None).await;
+    assert_eq!(shown["progress"]["cancelled"], 6);
 }
 
 #[tokio::test]

@@ -82,8 +82,9 @@ struct Draft {
 struct Real {
     sweep: String,
     hashes: Vec<String>,
-    /// Sweeps this test queued: the ones it may cancel (a cancelled sweep
-    /// can no longer be retried, so the finished one is never cancelled).
+    /// Sweeps this test queued and has not cancelled yet: the ones it may
+    /// cancel (a cancelled sweep can no longer be retried, so the finished
+    /// one is never cancelled).
     queued: Vec<String>,
     study_sweeps: Vec<(String, String)>,
     study_figures: Vec<(String, String)>,
@@ -562,7 +563,10 @@ impl Run {
                 if self.real.queued.is_empty() {
                     return None;
                 }
-                BTreeMap::from([("id".into(), g.pick(&self.real.queued))])
+                // Each is cancelled once: a second cancel finds nothing to
+                // cancel and answers 409.
+                let k = g.below(self.real.queued.len());
+                BTreeMap::from([("id".into(), self.real.queued.swap_remove(k))])
             }
             ["id"] => BTreeMap::from([("id".into(), self.real.sweep.clone())]),
             ["hash"] => BTreeMap::from([("hash".into(), g.pick(&self.real.hashes))]),

@@ -42,7 +42,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use checkpoints::StoredCheckpoint;
 pub use query::{series, SeriesError, SeriesPoint};
-pub use queue::Retry;
+pub use queue::{Cancel, Retry};
 pub use scratch::ScratchDatabase;
 pub use topup::PointJobs;
 

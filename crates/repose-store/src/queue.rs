@@ -326,10 +326,29 @@ impl Store {
     }
 
     /// Marks the sweep cancelled and its queued jobs cancelled; running
-    /// jobs learn it at their next heartbeat. Returns false for an unknown sweep.
-    pub async fn cancel_sweep(&self, sweep_id: &str) -> Result<bool> {
+    /// jobs learn it at their next heartbeat. A sweep with nothing queued
+    /// or running (finished, or cancelled before) is left as it is, so a
+    /// finished sweep keeps its state and its failed jobs can be retried.
+    pub async fn cancel_sweep(&self, sweep_id: &str) -> Result<Cancel> {
         let mut tx = self.pool.begin().await?;
-        let r = sqlx::query(&self.sql("UPDATE sweeps SET state = 'cancelled' WHERE id = $1"))
+        let known: Option<String> =
+            sqlx::query_scalar(&self.sql("SELECT state FROM sweeps WHERE id = $1"))
+                .bind(sweep_id)
+                .fetch_optional(&mut *tx)
+                .await?;
+        if known.is_none() {
+            return Ok(Cancel::Unknown);
+        }
+        let pending: i64 = sqlx::query_scalar(&self.sql(
+            "SELECT COUNT(*) FROM jobs WHERE sweep_id = $1 AND state IN ('queued', 'running')",
+        ))
+        .bind(sweep_id)
+        .fetch_one(&mut *tx)
+        .await?;
+        if pending == 0 {
+            return Ok(Cancel::Idle);
+        }
+        sqlx::query(&self.sql("UPDATE sweeps SET state = 'cancelled' WHERE id = $1"))
             .bind(sweep_id)
             .execute(&mut *tx)
             .await?;
@@ -341,7 +360,7 @@ impl Store {
         .execute(&mut *tx)
         .await?;
         tx.commit().await?;
-        Ok(r.rows_affected() == 1)
+        Ok(Cancel::Cancelled)
     }
 
     /// Puts the failed jobs of a sweep (attempts used up by lost workers,
@@ -383,6 +402,15 @@ impl Store {
         .await?;
         Ok(r.rows_affected() == 1)
     }
+}
+
+/// What [`Store::cancel_sweep`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cancel {
+    Unknown,
+    /// Nothing was queued or running: the sweep is as it was.
+    Idle,
+    Cancelled,
 }
 
 /// What [`Store::retry_failed`] did.

@@ -48,7 +48,10 @@ async fn claims_follow_priority_then_age_then_job_order() {
         .create_sweep(&sweep("gone", 9), &jobs("gone", 2), 3)
         .await
         .unwrap();
-    assert!(store.cancel_sweep(&cancelled.id).await.unwrap());
+    assert_eq!(
+        store.cancel_sweep(&cancelled.id).await.unwrap(),
+        repose_store::Cancel::Cancelled
+    );
     let mut order = Vec::new();
     while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
         order.push(c.sample_hash);

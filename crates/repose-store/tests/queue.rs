@@ -294,8 +294,14 @@ async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
             .await
             .unwrap()
             .unwrap();
-        assert!(store.cancel_sweep(&created.id).await.unwrap());
-        assert!(!store.cancel_sweep("no-such-sweep").await.unwrap());
+        assert_eq!(
+            store.cancel_sweep(&created.id).await.unwrap(),
+            repose_store::Cancel::Cancelled
+        );
+        assert_eq!(
+            store.cancel_sweep("no-such-sweep").await.unwrap(),
+            repose_store::Cancel::Unknown
+        );
         assert!(store
             .claim("w2", Duration::from_secs(60))
             .await
@@ -311,6 +317,32 @@ async fn cancelling_a_sweep_stops_claims_and_tells_running_workers() {
         assert!(store.release(&running.job_id, "w").await.unwrap());
         let p = store.progress(&created.id).await.unwrap();
         assert_eq!((p.cancelled, p.running, p.queued), (3, 0, 0));
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn a_finished_sweep_is_left_as_it_is_by_a_cancel() {
+    each_backend(|store| async move {
+        let report = report();
+        let (spec, jobs) = sweep(2, &[0.2]);
+        let created = store.create_sweep(&spec, &jobs, 3).await.unwrap();
+        while let Some(c) = store.claim("w", Duration::from_secs(60)).await.unwrap() {
+            store
+                .complete(&c.job_id, "w", &c.sample_hash, &report)
+                .await
+                .unwrap();
+        }
+        let before = store.sweep(&created.id).await.unwrap().unwrap().state;
+        assert_eq!(
+            store.cancel_sweep(&created.id).await.unwrap(),
+            repose_store::Cancel::Idle
+        );
+        let after = store.sweep(&created.id).await.unwrap().unwrap();
+        assert_eq!(after.state, before);
+        assert_ne!(after.state, "cancelled");
+        let p = store.progress(&created.id).await.unwrap();
+        assert_eq!((p.done, p.cancelled), (2, 0));
     })
     .await;
 }
