@@ -33,14 +33,8 @@ fn chromium() -> Option<PathBuf> {
     let path = PathBuf::from(
         std::env::var("REPOSE_CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into()),
     );
-    if path.exists() {
-        return Some(path);
-    }
-    if std::env::var("CI").as_deref() == Ok("true") {
-        panic!("Chromium is required in CI: {} not found", path.display());
-    }
-    eprintln!("skipping: no Chromium at {}", path.display());
-    None
+    let how = format!("looked for {}; .ci/run installs it", path.display());
+    repose_testkit::needs(path.exists(), "Chromium", &how).then_some(path)
 }
 
 fn screenshots() -> PathBuf {

@@ -23,13 +23,8 @@ fn slurm_is_up() -> bool {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_sweep_completes_through_a_slurm_job_array() {
-    if !slurm_is_up() {
-        assert_ne!(
-            std::env::var("CI").as_deref(),
-            Ok("true"),
-            "SLURM is required in CI (deploy/slurm/local-cluster.sh starts it)"
-        );
-        eprintln!("skipping: no SLURM cluster (deploy/slurm/local-cluster.sh starts one)");
+    let how = "deploy/slurm/local-cluster.sh starts one";
+    if !repose_testkit::needs(slurm_is_up(), "SLURM cluster", how) {
         return;
     }
     let scratch_db = common::postgres()

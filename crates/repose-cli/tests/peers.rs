@@ -35,13 +35,8 @@ fn rows(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
 
 #[test]
 fn liggghts_pours_the_dry_heap_on_repose_protocol_and_repose_reads_it() {
-    if !liggghts_is_there() {
-        assert_ne!(
-            std::env::var("CI").as_deref(),
-            Ok("true"),
-            "LIGGGHTS is required in CI (.ci/run installs Debian's liggghts)"
-        );
-        eprintln!("skipping: no liggghts (apt-get install liggghts)");
+    let how = "apt-get install liggghts; .ci/run installs it";
+    if !repose_testkit::needs(liggghts_is_there(), "LIGGGHTS", how) {
         return;
     }
     // A small heap of soft grains: a few seconds.

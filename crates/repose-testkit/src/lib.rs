@@ -21,6 +21,17 @@ pub fn in_ci() -> bool {
     std::env::var("CI").as_deref() == Ok("true")
 }
 
+/// Whether a test may go on with an outside tool it needs: true when the
+/// tool is `there`; otherwise false with a line on stderr (`how` says how
+/// to get it), or a failure in CI, where nothing may be skipped.
+pub fn needs(there: bool, what: &str, how: &str) -> bool {
+    if !there {
+        assert!(!in_ci(), "{what} is required in CI ({how})");
+        eprintln!("skipping: no {what} ({how})");
+    }
+    there
+}
+
 /// A fresh database `<prefix>_<uuid>` on the test server; `None` when no
 /// server answers, which fails the test in CI.
 pub async fn postgres(prefix: &str) -> Option<ScratchDatabase> {
