@@ -265,8 +265,8 @@ fn rise_sign_row(rise: Option<Aggregate>) -> Comparison {
              docs/reproduction-ep21-printed.md (a rise of −0.2 % ± 1.1 %), the dry angle stays \
              flat, so the paper's rise is no effect of stiffness in this model. Nor of our \
              engine: LIGGGHTS 3.8, the code the paper's authors extended, pouring the same \
-             glass-stiff dry heap with the paper's parameters, goes from 26.88° ± 0.13° at \
-             g̃ = 0.063 to 26.67° ± 0.23° at 100 (−0.8 % ± 1.0 %; \
+             glass-stiff dry heap with the paper's parameters, goes from 26.97° ± 0.11° at \
+             g̃ = 0.063 to 26.67° ± 0.23° at 100 (−1.1 % ± 0.9 %; \
              data/glass/liggghts-dry-1mm.csv, docs/model-3d.md): the stated model does not rise",
             sigma.map_or("no result".into(), |s| format!("{s:+.1}σ from none"))
         )
