@@ -325,18 +325,27 @@ impl Store {
         Ok(())
     }
 
+    /// A sweep's state (`active`, `cancelled`, ...), or None for an unknown
+    /// sweep, read on the pool or inside a transaction.
+    async fn sweep_state<'e, E>(&self, on: E, sweep_id: &str) -> Result<Option<String>>
+    where
+        E: sqlx::Executor<'e, Database = sqlx::Any>,
+    {
+        Ok(
+            sqlx::query_scalar(&self.sql("SELECT state FROM sweeps WHERE id = $1"))
+                .bind(sweep_id)
+                .fetch_optional(on)
+                .await?,
+        )
+    }
+
     /// Marks the sweep cancelled and its queued jobs cancelled; running
     /// jobs learn it at their next heartbeat. A sweep with nothing queued
     /// or running (finished, or cancelled before) is left as it is, so a
     /// finished sweep keeps its state and its failed jobs can be retried.
     pub async fn cancel_sweep(&self, sweep_id: &str) -> Result<Cancel> {
         let mut tx = self.pool.begin().await?;
-        let known: Option<String> =
-            sqlx::query_scalar(&self.sql("SELECT state FROM sweeps WHERE id = $1"))
-                .bind(sweep_id)
-                .fetch_optional(&mut *tx)
-                .await?;
-        if known.is_none() {
+        if self.sweep_state(&mut *tx, sweep_id).await?.is_none() {
             return Ok(Cancel::Unknown);
         }
         let pending: i64 = sqlx::query_scalar(&self.sql(
@@ -367,12 +376,7 @@ impl Store {
     /// scenes that could not be run) back in the queue with fresh attempts;
     /// finished jobs stay as they are. A cancelled sweep is not revived.
     pub async fn retry_failed(&self, sweep_id: &str) -> Result<Retry> {
-        let state: Option<String> =
-            sqlx::query_scalar(&self.sql("SELECT state FROM sweeps WHERE id = $1"))
-                .bind(sweep_id)
-                .fetch_optional(&self.pool)
-                .await?;
-        match state.as_deref() {
+        match self.sweep_state(&self.pool, sweep_id).await?.as_deref() {
             None => return Ok(Retry::Unknown),
             Some("cancelled") => return Ok(Retry::Cancelled),
             Some(_) => {}
