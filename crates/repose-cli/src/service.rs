@@ -315,7 +315,7 @@ pub fn worker(args: WorkerArgs) -> anyhow::Result<ExitCode> {
     }
     let lease = args.lease.config(String::new())?;
     runtime()?.block_on(async {
-        let store = Store::open(&args.database)
+        let store = Store::open_existing(&args.database)
             .await
             .with_context(|| format!("cannot open the database {}", args.database))?;
         let shutdown = shutdown_on_signals();

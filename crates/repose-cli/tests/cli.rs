@@ -223,6 +223,24 @@ fn a_workers_lease_heartbeat_and_checkpoints_are_refused_out_of_range() {
 }
 
 #[test]
+fn a_worker_on_a_store_no_server_has_made_exits_naming_it() {
+    // A mistyped path used to start an empty store that no server fed, and
+    // the worker waited on it for ever.
+    let dir = repose_testkit::scratch_dir("repose-worker-missing");
+    let file = dir.join("mistyped.db");
+    let db = format!("sqlite://{}", file.display());
+    let out = repose(&["worker", "--database", &db, "--exit-when-idle"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("mistyped.db") && stderr.contains("repose serve"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!file.exists(), "the worker created the store");
+}
+
+#[test]
 fn a_run_that_fails_says_why_and_exits_with_one() {
     // A forced step twice the contact time is refused before anything runs.
     let out = repose(&[

@@ -58,6 +58,17 @@ pub enum StoreError {
     Document(#[from] serde_json::Error),
     #[error("{0}")]
     Unsupported(&'static str),
+    #[error("no store at {0}: start `repose serve --database` on it first, which creates it")]
+    Missing(String),
+    #[error(
+        "the store is at schema {found} and this build needs {needed}: {}",
+        if found < needed {
+            "start this build's `repose serve` on it once, which migrates it"
+        } else {
+            "it was migrated by a newer build; run that build's workers"
+        }
+    )]
+    Schema { found: i64, needed: i64 },
 }
 
 pub type Result<T> = std::result::Result<T, StoreError>;
@@ -193,6 +204,20 @@ pub struct Progress {
     pub cancelled: i64,
 }
 
+/// The newest migration this build knows.
+fn latest_version() -> i64 {
+    MIGRATOR.iter().map(|m| m.version).max().unwrap_or(0)
+}
+
+/// The file an SQLite URL names (`sqlite://PATH?options`), none for an
+/// in-memory database or another backend.
+fn sqlite_file(url: &str) -> Option<&str> {
+    let rest = url.strip_prefix("sqlite:")?;
+    let rest = rest.strip_prefix("//").unwrap_or(rest);
+    let path = rest.split('?').next().unwrap_or(rest);
+    (!path.is_empty() && !path.starts_with(":memory:")).then_some(path)
+}
+
 impl Store {
     /// Connects (creating an SQLite file on first start) and applies the
     /// migrations the database lacks.
@@ -200,6 +225,27 @@ impl Store {
         let store = Store::connect(url).await?;
         if !store.schema_is_current().await {
             MIGRATOR.run(&store.pool).await?;
+        }
+        Ok(store)
+    }
+
+    /// Connects to a store that exists and is at this build's schema,
+    /// creating and migrating nothing: for workers, which share a store a
+    /// server owns. A mistyped SQLite path would otherwise start an empty
+    /// store that no server feeds, and a worker of another build would run
+    /// its queries against tables it does not know.
+    pub async fn open_existing(url: &str) -> Result<Store> {
+        if let Some(path) = sqlite_file(url) {
+            if !std::path::Path::new(path).is_file() {
+                return Err(StoreError::Missing(path.to_string()));
+            }
+        }
+        let store = Store::connect(url).await?;
+        let needed = latest_version();
+        let found = store.schema_version().await;
+        if found != needed {
+            store.pool.close().await;
+            return Err(StoreError::Schema { found, needed });
         }
         Ok(store)
     }
@@ -267,12 +313,17 @@ impl Store {
     /// role that may read and write rows but not change tables
     /// (`deploy/postgres/roles.sql`).
     async fn schema_is_current(&self) -> bool {
-        let latest = MIGRATOR.iter().map(|m| m.version).max().unwrap_or(0);
+        self.schema_version().await >= latest_version()
+    }
+
+    /// The newest migration applied to the database, 0 for none (or no
+    /// migrations table at all).
+    async fn schema_version(&self) -> i64 {
         let applied: std::result::Result<Option<i64>, sqlx::Error> =
             sqlx::query_scalar("SELECT MAX(version) FROM _sqlx_migrations WHERE success")
                 .fetch_one(&self.pool)
                 .await;
-        matches!(applied, Ok(Some(v)) if v >= latest)
+        applied.ok().flatten().unwrap_or(0)
     }
 
     /// Writes a consistent copy of an SQLite store to the file `path`

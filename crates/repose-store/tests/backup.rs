@@ -72,3 +72,64 @@ async fn a_file_that_is_no_database_is_named_as_such_at_once() {
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.starts_with("these are notes"));
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_worker_opens_only_a_store_that_exists_at_its_schema() {
+    sqlx::any::install_default_drivers();
+    let dir = repose_testkit::scratch_dir("repose-open-existing");
+
+    // A mistyped path: named, and no file is left behind.
+    let missing = dir.join("typo.db");
+    let Err(err) =
+        repose_store::Store::open_existing(&format!("sqlite://{}", missing.display())).await
+    else {
+        panic!("a worker opened a store that does not exist");
+    };
+    let err = err.to_string();
+    assert!(
+        err.contains("typo.db") && err.contains("repose serve"),
+        "{err}"
+    );
+    assert!(!missing.exists(), "opening created the file");
+
+    // A store an older build left: refused, and not migrated.
+    let old = dir.join("old.db");
+    let url = format!("sqlite://{}?mode=rwc", old.display());
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    repose_testkit::migrations_up_to(7, &dir)
+        .await
+        .run(&pool)
+        .await
+        .unwrap();
+    pool.close().await;
+    let Err(err) = repose_store::Store::open_existing(&url).await else {
+        panic!("a worker opened a store at an older schema");
+    };
+    let err = err.to_string();
+    assert!(err.contains("schema 7"), "{err}");
+    assert!(err.contains("migrates"), "{err}");
+    assert_eq!(version(&url).await, 7, "the worker migrated the store");
+
+    // Migrated by the server's open, the same store opens.
+    repose_store::Store::open(&url).await.unwrap();
+    let newest = version(&url).await;
+    let store = repose_store::Store::open_existing(&url).await.unwrap();
+    assert_eq!(store.sweeps_count().await.unwrap(), 0);
+    drop(store);
+
+    // A store a newer build migrated further: refused too.
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    sqlx::query(
+        "INSERT INTO _sqlx_migrations (version, description, installed_on, success, \
+         checksum, execution_time) VALUES (?, 'from a newer build', '2030-01-01', TRUE, x'00', 0)",
+    )
+    .bind(newest + 1)
+    .execute(&pool)
+    .await
+    .unwrap();
+    pool.close().await;
+    let Err(err) = repose_store::Store::open_existing(&url).await else {
+        panic!("a worker opened a store of a newer schema");
+    };
+    assert!(err.to_string().contains("newer build"), "{err}");
+}
