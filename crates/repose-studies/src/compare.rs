@@ -149,14 +149,7 @@ pub fn pooled_slope(points: &[(f64, Aggregate)]) -> Option<(f64, f64)> {
         .map(|p| p.2 * (p.0 - xm) * (p.1 - ym))
         .sum::<f64>()
         / sxx;
-    // Within: Σ (n − 1) sd² over Σ (n − 1).
-    let (ss, dof) = points
-        .iter()
-        .fold((0.0, 0.0), |(ss, dof), (_, a)| match (a.sd, a.n > 1) {
-            (Some(sd), true) => (ss + (a.n - 1) as f64 * sd * sd, dof + (a.n - 1) as f64),
-            _ => (ss, dof),
-        });
-    let within = (dof > 0.0).then(|| (ss / dof / sxx).sqrt());
+    let within = pooled_variance(points).map(|s2| (s2 / sxx).sqrt());
     let about = (pts.len() > 2).then(|| {
         let r2: f64 = pts
             .iter()
@@ -169,6 +162,44 @@ pub fn pooled_slope(points: &[(f64, Aggregate)]) -> Option<(f64, f64)> {
         (a, b) => a.or(b)?,
     };
     Some((slope, se))
+}
+
+/// The variance within points pooled over them, Σ (n − 1) sd² over
+/// Σ (n − 1): one scatter for points that scatter alike, resting on all
+/// their degrees of freedom rather than each point's few.
+pub fn pooled_variance(points: &[(f64, Aggregate)]) -> Option<f64> {
+    let (ss, dof) = points
+        .iter()
+        .fold((0.0, 0.0), |(ss, dof), (_, a)| match (a.sd, a.n > 1) {
+            (Some(sd), true) => (ss + (a.n - 1) as f64 * sd * sd, dof + (a.n - 1) as f64),
+            _ => (ss, dof),
+        });
+    (dof > 0.0).then(|| ss / dof)
+}
+
+/// The plain mean of the points' means, with its standard error from the
+/// pooled variance s² ([`pooled_variance`]): √(s² Σ 1/n) / K over K
+/// points. For points of a few samples each, whose own standard errors
+/// are too rough to add up.
+pub fn pooled_mean_of_means(points: &[(f64, Aggregate)]) -> Option<Aggregate> {
+    let counted: Vec<(f64, f64)> = points
+        .iter()
+        .filter_map(|(_, a)| Some((a.mean?, a.n as f64)))
+        .filter(|(_, n)| *n > 0.0)
+        .collect();
+    if counted.is_empty() {
+        return None;
+    }
+    let k = counted.len() as f64;
+    let mean = counted.iter().map(|(m, _)| m).sum::<f64>() / k;
+    let sem = pooled_variance(points)
+        .map(|s2| (s2 * counted.iter().map(|(_, n)| 1.0 / n).sum::<f64>()).sqrt() / k);
+    Some(Aggregate {
+        n: points.iter().map(|(_, a)| a.n).sum(),
+        mean: Some(mean),
+        sd: None,
+        sem,
+    })
 }
 
 #[cfg(test)]
@@ -253,5 +284,33 @@ mod tests {
         let (slope, se) = weighted_slope(&pts).unwrap();
         assert!((slope - 0.5).abs() < 1e-12);
         assert!(se > 0.0 && se < 0.1);
+    }
+
+    #[test]
+    fn a_mean_of_means_takes_its_error_from_the_pooled_scatter() {
+        // Three levels of two samples: sd 0.1, 0.5 and 0.9 pool to
+        // s² = (0.01 + 0.25 + 0.81) / 3.
+        let points = pts(&[(0.0, 24.0, 0.1), (1.0, 25.0, 0.5), (2.0, 26.0, 0.9)]);
+        let a = pooled_mean_of_means(&points).unwrap();
+        assert_eq!(a.n, 6);
+        assert!((a.mean.unwrap() - 25.0).abs() < 1e-12);
+        let s2: f64 = (0.01 + 0.25 + 0.81) / 3.0;
+        let want = (s2 * 1.5).sqrt() / 3.0;
+        assert!((a.sem.unwrap() - want).abs() < 1e-12, "{:?}", a.sem);
+        // One sample a level: no scatter to pool, so no error is claimed.
+        let single: Vec<(f64, Aggregate)> = points
+            .iter()
+            .map(|(x, a)| {
+                (
+                    *x,
+                    Aggregate {
+                        n: 1,
+                        sd: None,
+                        ..*a
+                    },
+                )
+            })
+            .collect();
+        assert_eq!(pooled_mean_of_means(&single).unwrap().sem, None);
     }
 }

@@ -48,6 +48,12 @@ pub struct Fit {
     pub dof: usize,
     /// Coefficient of determination of the unweighted y.
     pub r2: f64,
+    /// The weighted residuals' rms per degree of freedom, s: the errors
+    /// are read as relative weights, so the standard errors above are
+    /// scaled by it. A standard error divided by it is the fit's design
+    /// alone (its points' x and weights), for pooling s over several fits.
+    #[serde(skip)]
+    pub scale: f64,
 }
 
 impl Fit {
@@ -213,6 +219,7 @@ pub fn fit_holding(
         points: n,
         dof,
         r2: r_squared(&problem),
+        scale: s2.sqrt(),
     })
 }
 
@@ -287,6 +294,9 @@ pub(crate) mod tests {
         // t(0.975, 4) = 2.7764
         assert!(((got.hi - got.value) / got.se - 2.7764).abs() < 1e-3);
         assert!(f.r2 > 0.99 && f.dof == 4);
+        // The residual scale, and the design alone once divided out.
+        assert!((f.scale - (ssr / (n - 2.0)).sqrt()).abs() < 1e-9);
+        assert!((got.se / f.scale - 1.0 / sxx.sqrt()).abs() < 1e-9);
     }
 
     #[test]

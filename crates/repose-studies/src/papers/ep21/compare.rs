@@ -8,7 +8,7 @@ use super::curves::{
 };
 use super::figures::{d_by_gravity, d_data, on_earth};
 use super::quantities::{d_um, g_tilde, QUANTITIES, THETA_COLUMNS};
-use crate::compare::{pooled_slope, Comparison};
+use crate::compare::{pooled_mean_of_means, pooled_slope, Comparison};
 use crate::data::{StudyData, SweepData};
 use crate::fit::{fit, Fit, Param};
 use crate::fitted::Along;
@@ -201,30 +201,15 @@ fn eq4_rows(heaps: &SweepData) -> Vec<Comparison> {
 /// weighted straight line in log g̃.
 fn dry_rows(dry: &SweepData) -> Vec<Comparison> {
     let along: Vec<(f64, Aggregate)> = dry.along("ep21.g_tilde", None, "theta_r", &QUANTITIES);
-    let means: Vec<f64> = along.iter().filter_map(|(_, a)| a.mean).collect();
-    let level = (!means.is_empty()).then(|| {
-        let n = means.len() as f64;
-        let mean = means.iter().sum::<f64>() / n;
-        let sem = (along
-            .iter()
-            .map(|(_, a)| a.sem.unwrap_or(0.0).powi(2))
-            .sum::<f64>())
-        .sqrt()
-            / n;
-        Aggregate {
-            n: along.iter().map(|(_, a)| a.n).sum(),
-            mean: Some(mean),
-            sd: None,
-            sem: Some(sem),
-        }
-    });
+    // Two or so heaps a level: their own errors are too rough to add up
+    // or to weight by, so the levels share their pooled scatter.
+    let level = pooled_mean_of_means(&along);
     let mut rows = vec![Comparison::quoted(
         "θ_r,nc, mean over the gravity levels (°)".into(),
         (24.0, 1.0, 1.0),
         level,
         &dry_level_cause(dry),
     )];
-    // Two or so heaps a level: their own errors are too rough to weight by.
     let logged: Vec<(f64, Aggregate)> = along.iter().map(|(g, a)| (g.log10(), *a)).collect();
     let rise = pooled_slope(&logged)
         .zip(level.and_then(|l| l.mean))

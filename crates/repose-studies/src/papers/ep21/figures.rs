@@ -12,7 +12,7 @@ use crate::data::SweepData;
 use crate::draw::measured;
 use crate::figure::{Figure, FitData, Kind, Layer, PlotPoint, SeriesData};
 use crate::fit::Datum;
-use crate::fitted::{fitted, weights_all_or_none, Along};
+use crate::fitted::{fitted, weights_all_or_none, Along, OWN_ERROR_SAMPLES};
 use repose_store::Point;
 use serde_json::Value;
 
@@ -175,8 +175,18 @@ fn fig3b() -> Figure {
     }
 }
 
-/// D and its standard error at one gravity level, or why it has none.
-pub type FittedD = Result<(f64, f64), String>;
+/// D fitted at one gravity level, or why it has none.
+pub type FittedD = Result<LevelD, String>;
+
+/// D at one gravity level: its value and standard error, and the fit's
+/// residual scale and degrees of freedom behind that error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LevelD {
+    pub value: f64,
+    pub se: f64,
+    pub scale: f64,
+    pub dof: usize,
+}
 
 /// D fitted at each gravity level (eq. 1, μ_∞ held at `mu`), with its
 /// standard error: the data of fig. 3C, where `mu` is the paper's 0.447.
@@ -194,26 +204,41 @@ pub fn d_by_gravity(d: &SweepData, angle: &str, mu: f64) -> Vec<(f64, FittedD)> 
         .filter_map(|(g, data)| {
             let g = g?.as_f64()?;
             let fit = crate::fit::fit_holding(&EQ1_MU_GIVEN, &data, &[80.0], &[mu])
-                .map(|f| (f.params[0].value, f.params[0].se))
+                .map(|f| LevelD {
+                    value: f.params[0].value,
+                    se: f.params[0].se,
+                    scale: f.scale,
+                    dof: f.dof,
+                })
                 .map_err(|e| e.to_string());
             Some((g, fit))
         })
         .collect()
 }
 
-/// The fitted D against g̃, weighted by their standard errors where every
-/// level has one: what eq. 2 is fitted to, on the figure and in the
-/// comparison alike.
+/// The fitted D against g̃, weighted by their standard errors: what eq. 2
+/// is fitted to, on the figure and in the comparison alike. A level's
+/// error is its fit's design (how many sizes, where, how many samples)
+/// times that fit's residual scale, which rests on the fit's few degrees
+/// of freedom; as with a point's own standard error ([`weigh`](crate::fitted::weigh)), each
+/// level's own scale is used only where every level's fit has at least
+/// [`OWN_ERROR_SAMPLES`] − 1 degrees of freedom. Otherwise the levels share
+/// one scale, and the design alone weighs them.
 pub fn d_data(found: &[(f64, FittedD)]) -> Vec<Datum> {
-    let mut data: Vec<Datum> = found
+    let levels: Vec<(f64, LevelD)> = found
         .iter()
-        .filter_map(|(g, f)| {
-            let (v, se) = f.as_ref().ok()?;
-            Some(Datum {
-                x: *g,
-                y: *v,
-                sigma: (*se > 0.0).then_some(*se),
-            })
+        .filter_map(|(g, f)| Some((*g, *f.as_ref().ok()?)))
+        .collect();
+    let usable = |l: &LevelD| l.se > 0.0 && l.scale > 0.0;
+    let own = levels
+        .iter()
+        .all(|(_, l)| usable(l) && l.dof as i64 + 1 >= OWN_ERROR_SAMPLES);
+    let mut data: Vec<Datum> = levels
+        .iter()
+        .map(|(g, l)| Datum {
+            x: *g,
+            y: l.value,
+            sigma: usable(l).then(|| if own { l.se } else { l.se / l.scale }),
         })
         .collect();
     weights_all_or_none(&mut data);
@@ -226,11 +251,11 @@ fn d_against_g(d: &SweepData) -> (Vec<SeriesData>, Vec<FitData>) {
     let points: Vec<PlotPoint> = found
         .iter()
         .filter_map(|(g, f)| {
-            let (v, se) = f.as_ref().ok()?;
+            let l = f.as_ref().ok()?;
             Some(PlotPoint {
-                sem: Some(*se),
-                sd: Some(*se),
-                ..PlotPoint::value(*g, *v)
+                sem: Some(l.se),
+                sd: Some(l.se),
+                ..PlotPoint::value(*g, l.value)
             })
         })
         .collect();
@@ -364,5 +389,49 @@ fn regime() -> Figure {
                 (s, Vec::new())
             },
         }],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level(value: f64, se: f64, scale: f64, dof: usize) -> (f64, FittedD) {
+        let g = value / 10.0;
+        (
+            g,
+            Ok(LevelD {
+                value,
+                se,
+                scale,
+                dof,
+            }),
+        )
+    }
+
+    #[test]
+    fn levels_of_few_degrees_of_freedom_share_one_residual_scale() {
+        // Two levels of the same design (the same error per unit scale);
+        // the second's few sizes happened to lie close to its curve.
+        let few = [level(100.0, 4.0, 2.0, 3), level(200.0, 0.2, 0.1, 3)];
+        let data = d_data(&few);
+        let ratio = data[0].sigma.unwrap() / data[1].sigma.unwrap();
+        assert!((ratio - 1.0).abs() < 1e-12, "{ratio}");
+        // With nine degrees of freedom each, each level's own error weighs it.
+        let many = [level(100.0, 4.0, 2.0, 9), level(200.0, 0.2, 0.1, 9)];
+        let data = d_data(&many);
+        assert_eq!(data[0].sigma, Some(4.0));
+        assert_eq!(data[1].sigma, Some(0.2));
+    }
+
+    #[test]
+    fn a_level_without_an_error_leaves_every_level_unweighted() {
+        let data = d_data(&[
+            level(100.0, 4.0, 2.0, 3),
+            level(200.0, 0.0, 0.0, 3),
+            (5.0, Err("too few sizes".into())),
+        ]);
+        assert_eq!(data.len(), 2);
+        assert!(data.iter().all(|d| d.sigma.is_none()));
     }
 }
