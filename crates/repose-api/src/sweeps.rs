@@ -81,8 +81,8 @@ pub(crate) async fn enqueue(
     store: &Store,
     spec: &SweepSpec,
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
-    let jobs = spec.expand()?;
-    let new_jobs: Vec<NewJob> = jobs.iter().map(|j| j.to_new_job()).collect();
+    // Each resolved scene is dropped once it is written as text.
+    let new_jobs: Vec<NewJob> = spec.expand()?.into_iter().map(|j| j.to_new_job()).collect();
     let created = store
         .create_sweep(&spec.new_sweep(), &new_jobs, crate::MAX_ATTEMPTS)
         .await?;

@@ -121,8 +121,9 @@ pub struct NewJob {
     pub seed: u64,
     /// Identity of the sample (the same scene, seed and engine hash alike).
     pub sample_hash: String,
-    /// The fully resolved scene, as stored and run (JSON).
-    pub scene: serde_json::Value,
+    /// The fully resolved scene, as stored and run: JSON text, which a
+    /// large sweep holds in a fifth of the memory of a parsed document.
+    pub scene: String,
 }
 
 /// What a run took and left: grain counts, steps and times.

@@ -86,7 +86,7 @@ impl Store {
         .bind(job.sample as i64)
         .bind(job.seed as i64)
         .bind(&job.sample_hash)
-        .bind(job.scene.to_string())
+        .bind(&job.scene)
         .bind(state)
         .bind(order.max_attempts)
         .bind(order.now)

@@ -32,7 +32,7 @@ fn jobs(points: &[f64], samples: u64) -> Vec<NewJob> {
                 sample: seed as u32,
                 seed,
                 sample_hash: format!("mu{mu}-seed{seed}"),
-                scene: json!({}),
+                scene: "{}".into(),
             });
         }
     }

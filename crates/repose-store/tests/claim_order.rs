@@ -22,7 +22,7 @@ fn jobs(tag: &str, n: u64) -> Vec<NewJob> {
             sample: k as u32,
             seed: k,
             sample_hash: format!("{tag}-{k}"),
-            scene: json!({}),
+            scene: "{}".into(),
         })
         .collect()
 }

@@ -48,7 +48,8 @@ fn sweep(samples: u32, mus: &[f64]) -> (NewSweep, Vec<NewJob>) {
                 sample: k,
                 seed: k as u64,
                 sample_hash: format!("mu={mu}/seed={k}"),
-                scene: json!({"protocol": "fill_release", "seed": k, "contact": {"mu": mu}}),
+                scene: json!({"protocol": "fill_release", "seed": k, "contact": {"mu": mu}})
+                    .to_string(),
             })
         })
         .collect();

@@ -403,7 +403,7 @@ impl JobSpec {
             sample: self.sample,
             seed: self.seed,
             sample_hash: self.sample_hash.clone(),
-            scene: serde_json::to_value(&self.scene).unwrap_or(Value::Null),
+            scene: serde_json::to_string(&self.scene).unwrap_or_else(|_| "null".into()),
         }
     }
 }
