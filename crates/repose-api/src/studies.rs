@@ -181,7 +181,7 @@ pub struct QueueRequest {
 #[utoipa::path(post, path = "/api/studies/{paper}/sweeps/{key}", tag = "studies",
     params(("paper" = String, Path), ("key" = String, Path, description = "the study sweep, e.g. fig347")),
     request_body(content = QueueRequest, description = "optional: an empty body queues the paper's sweep at the standard fidelity"),
-    responses((status = 201, body = Queued), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody), (status = 422, body = ErrorBody)))]
+    responses((status = 201, body = Queued, description = "queued"), (status = 200, body = Queued, description = "the same sweep, queued before with the same settings and samples and none failed: returned, not doubled"), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody), (status = 422, body = ErrorBody)))]
 pub async fn queue(
     State(s): State<AppState>,
     Path((paper_key, key)): Path<(String, String)>,

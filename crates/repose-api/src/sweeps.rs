@@ -9,7 +9,7 @@ use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use repose_store::{
-    Aggregate, Cancel, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo,
+    Aggregate, Cancel, Created, NewJob, Point, Retry, Sample, SeriesPoint, Store, SweepInfo,
 };
 use repose_sweeps::SweepSpec;
 use serde::{Deserialize, Serialize};
@@ -83,11 +83,26 @@ pub(crate) async fn enqueue(
 ) -> ApiResult<(StatusCode, Json<Queued>)> {
     // Each resolved scene is dropped once it is written as text.
     let new_jobs: Vec<NewJob> = spec.expand()?.into_iter().map(|j| j.to_new_job()).collect();
+    let sweep = spec.new_sweep();
+    if let Some(same) = store.same_sweep(&sweep, &new_jobs).await? {
+        return Ok((StatusCode::OK, queued_answer(same, true)));
+    }
     let created = store
-        .create_sweep(&spec.new_sweep(), &new_jobs, crate::MAX_ATTEMPTS)
+        .create_sweep(&sweep, &new_jobs, crate::MAX_ATTEMPTS)
         .await?;
+    Ok((StatusCode::CREATED, queued_answer(created, false)))
+}
+
+/// The answer to queueing a sweep: a new one, or the same study sweep
+/// queued before (`existing`).
+fn queued_answer(created: Created, existing: bool) -> Json<Queued> {
     let queued = created.jobs - created.reused;
-    let message = if created.reused > 0 {
+    let message = if existing {
+        format!(
+            "the same sweep is already queued: {} jobs, {} done, {queued} to run",
+            created.jobs, created.reused
+        )
+    } else if created.reused > 0 {
         format!(
             "{} jobs: {queued} queued, {} reuse samples already computed",
             created.jobs, created.reused
@@ -95,17 +110,14 @@ pub(crate) async fn enqueue(
     } else {
         format!("{} jobs queued", created.jobs)
     };
-    Ok((
-        StatusCode::CREATED,
-        Json(Queued {
-            links: serde_json::json!({ "self": format!("/api/sweeps/{}", created.id) }),
-            id: created.id,
-            jobs: created.jobs,
-            reused: created.reused,
-            queued,
-            message,
-        }),
-    ))
+    Json(Queued {
+        links: serde_json::json!({ "self": format!("/api/sweeps/{}", created.id) }),
+        id: created.id,
+        jobs: created.jobs,
+        reused: created.reused,
+        queued,
+        message,
+    })
 }
 
 /// Queue a sweep.

@@ -344,6 +344,71 @@ async fn a_papers_sweep_runs_a_variant_of_the_model_when_asked() {
 }
 
 #[tokio::test]
+async fn a_study_sweep_queued_again_is_the_same_sweep_until_it_fails_or_is_cancelled() {
+    let s = store().await;
+    let body = json!({"fidelity": "quick", "reduced": true}).to_string();
+    let post = |body: String| {
+        let s = s.clone();
+        async move { call(&s, "POST", "/api/studies/lh93/sweeps/fig347", Some(&body)).await }
+    };
+    let (status, first, text) = post(body.clone()).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    let id = first["id"].as_str().unwrap().to_string();
+    // A job claimed and handed back, then the same request again: the
+    // same sweep.
+    let claim = s
+        .claim("t", std::time::Duration::from_secs(60))
+        .await
+        .unwrap()
+        .unwrap();
+    assert!(s.release(&claim.job_id, "t").await.unwrap());
+    let (status, again, text) = post(body.clone()).await;
+    assert_eq!(status, StatusCode::OK, "{text}");
+    assert_eq!(again["id"], id.as_str());
+    assert_eq!(again["jobs"], 9);
+    assert_eq!(again["queued"], 9);
+    assert!(
+        again["message"]
+            .as_str()
+            .unwrap()
+            .contains("already queued"),
+        "{text}"
+    );
+    let (_, list, _) = call(&s, "GET", "/api/sweeps", None).await;
+    assert_eq!(list["sweeps"].as_array().unwrap().len(), 1, "{list}");
+    // Other settings make another sweep.
+    let (status, other, text) =
+        post(json!({"fidelity": "quick", "reduced": true, "samples": 2}).to_string()).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_ne!(other["id"], id.as_str());
+    // A failed job: queueing again makes a new sweep, which runs it anew.
+    let (_, _, _) = call(
+        &s,
+        "POST",
+        &format!("/api/sweeps/{}/cancel", other["id"].as_str().unwrap()),
+        None,
+    )
+    .await;
+    let claim = s
+        .claim("t", std::time::Duration::from_secs(60))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(claim.sweep_id, id);
+    assert!(s.fail(&claim.job_id, "t", "blew up").await.unwrap());
+    let (status, renewed, text) = post(body.clone()).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_ne!(renewed["id"], id.as_str());
+    // Cancelled: the next request queues afresh too.
+    let renewed = renewed["id"].as_str().unwrap().to_string();
+    let (status, _, text) = call(&s, "POST", &format!("/api/sweeps/{renewed}/cancel"), None).await;
+    assert!(status.is_success(), "{text}");
+    let (status, fresh, text) = post(body).await;
+    assert_eq!(status, StatusCode::CREATED, "{text}");
+    assert_ne!(fresh["id"], renewed.as_str());
+}
+
+#[tokio::test]
 async fn a_papers_sweep_queued_cheapest_first_at_a_priority_is_claimed_ahead() {
     let s = store().await;
     let queue = |body: Value| {

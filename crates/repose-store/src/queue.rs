@@ -59,6 +59,51 @@ impl Store {
         })
     }
 
+    /// The newest sweep queued for the same study with the same spec, if its
+    /// jobs are `jobs`' samples in their order and none has failed: queueing
+    /// a study sweep again (an interim report, a second click) returns it
+    /// rather than a twin holding the same samples. A sweep whose samples
+    /// changed (another engine) or that has failed jobs gets a new one, which
+    /// queues what is missing. `jobs` of the answer counts the sweep's jobs,
+    /// `reused` those done.
+    pub async fn same_sweep(&self, sweep: &NewSweep, jobs: &[NewJob]) -> Result<Option<Created>> {
+        let Some(study) = &sweep.study else {
+            return Ok(None);
+        };
+        let id: Option<String> = sqlx::query_scalar(&self.sql(
+            "SELECT id FROM sweeps WHERE study = $1 AND spec = $2 AND state <> 'cancelled' \
+             ORDER BY created_at DESC, id LIMIT 1",
+        ))
+        .bind(study)
+        .bind(sweep.spec.to_string())
+        .fetch_optional(&self.pool)
+        .await?;
+        let Some(id) = id else {
+            return Ok(None);
+        };
+        let rows = sqlx::query(
+            &self.sql("SELECT sample_hash, state FROM jobs WHERE sweep_id = $1 ORDER BY seq"),
+        )
+        .bind(&id)
+        .fetch_all(&self.pool)
+        .await?;
+        let same = rows.len() == jobs.len()
+            && rows
+                .iter()
+                .zip(jobs)
+                .all(|(r, j)| r.get::<String, _>("sample_hash") == j.sample_hash);
+        let state = |r: &AnyRow| r.get::<String, _>("state");
+        if !same || rows.iter().any(|r| state(r) == "failed") {
+            return Ok(None);
+        }
+        let done = rows.iter().filter(|r| state(r) == "done").count();
+        Ok(Some(Created {
+            id,
+            jobs: rows.len(),
+            reused: done,
+        }))
+    }
+
     /// Inserts one job of a sweep; a job whose sample already has a result
     /// is created done (reused). Returns whether it was reused.
     pub(crate) async fn insert_job(

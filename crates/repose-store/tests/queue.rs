@@ -572,3 +572,40 @@ async fn a_sample_queued_by_two_sweeps_runs_once_from_its_furthest_checkpoint() 
     })
     .await;
 }
+
+#[tokio::test]
+async fn a_study_sweep_with_the_same_spec_and_samples_is_found_again() {
+    each_backend(|store| async move {
+        let (mut new, jobs) = sweep(2, &[0.1, 0.2]);
+        // A sweep of no study is never matched: each POST is its own sweep.
+        store.create_sweep(&new, &jobs, 3).await.unwrap();
+        assert!(store.same_sweep(&new, &jobs).await.unwrap().is_none());
+        new.study = Some("lh93/fig2".into());
+        assert!(store.same_sweep(&new, &jobs).await.unwrap().is_none());
+        let created = store.create_sweep(&new, &jobs, 3).await.unwrap();
+        let claim = store
+            .claim("w", Duration::from_secs(60))
+            .await
+            .unwrap()
+            .unwrap();
+        let done = store
+            .complete(&claim.job_id, "w", &claim.sample_hash, &report())
+            .await
+            .unwrap();
+        assert!(done);
+        let found = store.same_sweep(&new, &jobs).await.unwrap().unwrap();
+        assert_eq!(found.id, created.id);
+        assert_eq!((found.jobs, found.reused), (4, 1));
+        // Other samples under the same spec (another engine's hashes), or
+        // jobs in another order, are another sweep.
+        let mut renamed = jobs.clone();
+        renamed[3].sample_hash.push_str("/v2");
+        assert!(store.same_sweep(&new, &renamed).await.unwrap().is_none());
+        let reversed: Vec<NewJob> = jobs.iter().rev().cloned().collect();
+        assert!(store.same_sweep(&new, &reversed).await.unwrap().is_none());
+        let mut other = new.clone();
+        other.spec["samples"] = json!(3);
+        assert!(store.same_sweep(&other, &jobs).await.unwrap().is_none());
+    })
+    .await;
+}
