@@ -77,7 +77,9 @@ async fn a_sweep_runs_end_to_end_and_its_points_match_its_samples() {
         .unwrap();
     let series = measured["points"].as_array().unwrap();
     assert_eq!(series.len(), 2);
-    for p in points["points"].as_array().unwrap() {
+    let points = points["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{points:?}");
+    for p in points {
         point_matches_its_samples(p, &samples, series);
     }
     // the physics came through: more friction, steeper pile
@@ -180,21 +182,65 @@ async fn assert_every_job_done_once(store: &Store, sweep: &str, jobs: &[JobSpec]
     assert_eq!(total, jobs.len() as i64);
 }
 
+/// A worker's closing tally: results written and leases lost.
+fn tally(stderr: &str) -> (u64, u64) {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("repose worker:"))
+        .unwrap_or_else(|| panic!("no tally in {stderr}"));
+    let count = |what: &str| -> u64 {
+        let before = line.split(what).next().unwrap_or_default();
+        let n = before
+            .trim_end()
+            .rsplit([' ', ','])
+            .next()
+            .unwrap_or_default();
+        n.parse().unwrap_or_else(|_| panic!("{what} in {line}"))
+    };
+    (count(" results written"), count(" lost leases"))
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn worker_processes_on_postgres_do_every_job_exactly_once() {
+async fn worker_processes_on_postgres_share_the_jobs_and_do_each_once() {
     let Some(db) = postgres().await else { return };
     let url = db.url().to_string();
     let store = Store::open(&url).await.unwrap();
+    // The workers wait on the empty queue first, so that all of them are
+    // there to claim when the sweep arrives.
+    let workers: Vec<Child> = (0..4).map(|_| worker(&url, &[])).collect();
+    tokio::time::sleep(Duration::from_secs(1)).await;
     let spec = cheap_sweep(60);
     let (created, jobs) = create(&store, &spec, 3).await;
-    run_workers_until_idle(&url, 4);
+    let start = Instant::now();
+    while store.progress(&created.id).await.unwrap().done < 60 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the sweep never finished"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let mut written = Vec::new();
+    for w in workers {
+        signal(&w, "TERM");
+        let out = w.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{stderr}");
+        let (n, lost) = tally(&stderr);
+        assert_eq!(lost, 0, "{stderr}");
+        written.push(n);
+    }
     assert_every_job_done_once(&store, &created.id, &jobs).await;
-    // the work was shared
-    let owners: i64 = sqlx::query_scalar("SELECT COUNT(DISTINCT job_id) FROM results")
+    // Every result written once, by more than one worker, each job claimed once.
+    assert_eq!(written.iter().sum::<u64>(), 60, "{written:?}");
+    assert!(
+        written.iter().filter(|n| **n > 0).count() >= 2,
+        "{written:?}"
+    );
+    let attempts: i64 = sqlx::query_scalar("SELECT MAX(attempts) FROM jobs")
         .fetch_one(store.pool())
         .await
         .unwrap();
-    assert_eq!(owners, 60);
+    assert_eq!(attempts, 1);
     repose_testkit::drop_postgres(db, store).await;
 }
 
@@ -255,6 +301,7 @@ async fn four_workers_on_one_sqlite_file_never_see_a_locked_database() {
     let (created, jobs) = create(&store, &spec, 3).await;
     for stderr in run_workers_until_idle(&url, 4) {
         assert!(!stderr.contains("locked"), "{stderr}");
+        assert_eq!(tally(&stderr).1, 0, "{stderr}");
     }
     assert_every_job_done_once(&store, &created.id, &jobs).await;
 }
@@ -266,6 +313,22 @@ async fn one_long_job(url: &str) -> (Store, String, Vec<JobSpec>) {
         serde_json::from_value(json!({"protocol": "fill_release", "samples": 1})).unwrap();
     let (created, jobs) = create(&store, &spec, 3).await;
     (store, created.id, jobs)
+}
+
+/// The lines a child writes to its stderr, as they come.
+fn stderr_lines(child: &mut Child) -> std::sync::mpsc::Receiver<String> {
+    use std::io::BufRead;
+    let stderr = child.stderr.take().expect("stderr is piped");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stderr).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
 }
 
 async fn wait_running(store: &Store, sweep: &str) {
@@ -283,10 +346,11 @@ async fn wait_running(store: &Store, sweep: &str) {
 async fn a_worker_keeps_its_result_through_a_database_outage_and_writes_it_after() {
     let Some(db) = postgres().await else { return };
     let (store, sweep, jobs) = one_long_job(db.url()).await;
-    let w = worker(
+    let mut w = worker(
         db.url(),
         &["--exit-when-idle", "--lease", "30", "--heartbeat", "1"],
     );
+    let lines = stderr_lines(&mut w);
     wait_running(&store, &sweep).await;
     // The database goes away: no new connections, every open one cut.
     let admin = |sql: String| {
@@ -303,19 +367,35 @@ async fn a_worker_keeps_its_result_through_a_database_outage_and_writes_it_after
         db.name()
     ))
     .await;
-    // Long enough for the run to end and its first writes to fail.
-    tokio::time::sleep(Duration::from_secs(6)).await;
+    // Down until the run has ended and a write of its result has failed,
+    // however long the run takes on a busy machine.
+    let mut stderr = String::new();
+    while !stderr.contains("could not store the result") {
+        let line = lines
+            .recv_timeout(Duration::from_secs(120))
+            .unwrap_or_else(|_| panic!("no failed write while the database was down: {stderr}"));
+        stderr.push_str(&line);
+        stderr.push('\n');
+    }
     admin(format!(
         "ALTER DATABASE {} ALLOW_CONNECTIONS true",
         db.name()
     ))
     .await;
-    let out = w.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(stderr.contains("could not store the result"), "{stderr}");
+    let status = w.wait().unwrap();
+    stderr.extend(lines.iter().map(|l| l + "\n"));
+    assert!(status.success(), "{stderr}");
     assert!(stderr.contains("1 results written"), "{stderr}");
+    assert!(
+        !stderr.contains("lease lost") && !stderr.contains("lease ran out"),
+        "the lease ran out: {stderr}"
+    );
     assert_every_job_done_once(&store, &sweep, &jobs).await;
+    let attempts: i64 = sqlx::query_scalar("SELECT MAX(attempts) FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(attempts, 1, "the job ran twice");
     repose_testkit::drop_postgres(db, store).await;
 }
 
@@ -445,7 +525,9 @@ async fn a_sample_that_fails_is_stored_with_its_reason_and_no_angle() {
         }
     }
     let points = get(&format!("{}/api/sweeps/{id}/points", server.url)).await;
-    for p in points["points"].as_array().unwrap() {
+    let points = points["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{points:?}");
+    for p in points {
         let coarse = p["point"]["numerics.dt"] == json!(2.1e-4);
         let expected = if coarse { (2, 0) } else { (0, 2) };
         let got = (

@@ -145,6 +145,8 @@ pub fn worker(database: &str, extra: &[&str]) -> Child {
     Command::new(BIN)
         .args(["worker", "--database", database])
         .args(extra)
+        // Warnings (a locked database, a failed write) are what tests read.
+        .env("REPOSE_LOG", "warn")
         .stderr(Stdio::piped())
         .spawn()
         .expect("repose worker starts")

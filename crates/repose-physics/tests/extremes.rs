@@ -77,9 +77,15 @@ fn stiffness_from_1e3_to_1e10_runs_or_fails_with_a_reason() {
     // half a radius: the default guard stops the run and says why…
     let soft = run_scene(SMALL, &["contact.k_n=1e3"]);
     assert_clean(&soft, "k_n = 1e3");
-    if let Outcome::Failed { reason, .. } = &soft.outcome {
-        assert!(reason.contains("overlap"), "{reason}");
-    }
+    assert_eq!(soft.outcome.status(), "failed", "{:?}", soft.outcome);
+    let reason = soft.outcome.reason().unwrap_or_default();
+    assert!(reason.contains("overlap"), "{reason}");
+    // …and it is the guard that stops it: raised past any overlap, the
+    // same grains are not stopped for overlapping.
+    let unguarded = run_scene(SMALL, &["contact.k_n=1e3", "numerics.max_overlap=2"]);
+    assert_clean(&unguarded, "k_n = 1e3, guard 2");
+    let reason = unguarded.outcome.reason().unwrap_or_default();
+    assert!(!reason.contains("overlap"), "{reason}");
     // …and k_n = 10⁴ with the guard raised to 1.5 radii (as the stiffness
     // study does) gets its pile.
     let soft = run_scene(SMALL, &["contact.k_n=1e4", "numerics.max_overlap=1.5"]);
@@ -208,6 +214,8 @@ fn a_forced_step_above_the_stability_limit_is_refused_or_caught() {
     let r = run_scene(SMALL, &[&coarse]);
     assert_clean(&r, "dt = 0.3 t_c");
     assert_eq!(r.outcome.status(), "failed", "{:?}", r.outcome);
+    let reason = r.outcome.reason().unwrap_or_default();
+    assert!(reason.contains("time step"), "{reason}");
 }
 
 /// Runs a closure on the closed, filled box the engine builds for a scene.

@@ -3,6 +3,7 @@
 //! that says why — never a panic, never a silent NaN.
 
 use proptest::prelude::*;
+use repose_physics::report::Outcome;
 use repose_physics::{run, Quiet, Scene};
 
 /// A small random scene: tiny boxes keep each case well under a second.
@@ -70,6 +71,17 @@ proptest! {
         } else {
             let reason = report.outcome.reason().unwrap_or_default();
             prop_assert!(!reason.is_empty(), "{:?}", report.outcome);
+            // What a run that went wrong still reports is finite, and no
+            // angle comes from it.
+            for (name, v) in &report.metrics {
+                prop_assert!(v.is_finite(), "{name} = {v} from {:?}", report.outcome);
+            }
+            // A tilted pile that never slid, or failed while tilting,
+            // still has the angle it was built with.
+            let tilting = matches!(&report.outcome,
+                Outcome::Failed { phase, .. } | Outcome::NotSettled { phase, .. } if phase == "tilt")
+                || matches!(report.outcome, Outcome::NoOnset { .. });
+            prop_assert!(tilting || report.metric("theta_r").is_none(), "θ_R from {:?}", report.outcome);
         }
         prop_assert!(report.simulated_time.is_finite() && report.wall_time.is_finite());
     }

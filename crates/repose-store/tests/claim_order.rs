@@ -1,7 +1,8 @@
 //! Jobs are claimed by sweep priority, then oldest sweep first, then in
-//! job order; a cancelled sweep's jobs are never claimed.
+//! job order; a cancelled sweep's jobs are never claimed. On SQLite and on
+//! PostgreSQL, whose claim takes its own path (a lock and `SKIP LOCKED`).
 
-use repose_store::{NewJob, NewSweep};
+use repose_store::{NewJob, NewSweep, Store};
 use serde_json::json;
 use std::time::Duration;
 
@@ -28,8 +29,21 @@ fn jobs(tag: &str, n: u64) -> Vec<NewJob> {
 }
 
 #[tokio::test]
-async fn claims_follow_priority_then_age_then_job_order() {
-    let store = repose_testkit::sqlite("repose-order").await;
+async fn claims_follow_priority_then_age_then_job_order_on_sqlite() {
+    claims_follow_priority_then_age_then_job_order(repose_testkit::sqlite("repose-order").await)
+        .await;
+}
+
+#[tokio::test]
+async fn claims_follow_priority_then_age_then_job_order_on_postgres() {
+    if let Some(db) = repose_testkit::postgres("repose_order").await {
+        let store = db.open().await.unwrap();
+        claims_follow_priority_then_age_then_job_order(store.clone()).await;
+        repose_testkit::drop_postgres(db, store).await;
+    }
+}
+
+async fn claims_follow_priority_then_age_then_job_order(store: Store) {
     store
         .create_sweep(&sweep("old", 0), &jobs("old", 3), 3)
         .await
