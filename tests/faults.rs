@@ -1,8 +1,9 @@
 //! Faults through a 300-job sweep, on SQLite and on PostgreSQL: worker
 //! processes killed with SIGKILL every two to three seconds and started
 //! again, the server killed and started again once, and (on PostgreSQL)
-//! the database restarted once. Every job must end done with exactly one
-//! result, none stuck, and the running aggregates must equal the samples.
+//! the database restarted once (checked by its start time). At least
+//! three kills must catch a worker inside a job. Every job must end done
+//! with exactly one result, none stuck, and the running aggregates must equal the samples.
 //! Jobs whose attempts the kills used up are run again with `repose retry`.
 
 use repose_store::Store;
@@ -34,6 +35,8 @@ fn spec() -> Value {
 #[derive(Debug, Default)]
 struct Faults {
     worker_kills: u32,
+    /// Kills of a worker that held a running job at that moment.
+    kills_mid_job: u32,
     server_restarts: u32,
     database_restarts: u32,
     retried: u64,
@@ -55,6 +58,25 @@ fn restart_postgres() -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// Whether the worker process `pid` holds a running job's lease (its
+/// leases are named `host-pid-slot`).
+async fn holds_a_job(store: &Store, pid: u32) -> bool {
+    let held: Result<i64, _> = sqlx::query_scalar(&format!(
+        "SELECT COUNT(*) FROM jobs WHERE state = 'running' AND lease_owner LIKE '%-{pid}-%'"
+    ))
+    .fetch_one(store.pool())
+    .await;
+    held.is_ok_and(|n| n > 0)
+}
+
+/// When the PostgreSQL server behind `store` started.
+async fn postmaster_start(store: &Store) -> String {
+    sqlx::query_scalar("SELECT CAST(pg_postmaster_start_time() AS TEXT)")
+        .fetch_one(store.pool())
+        .await
+        .expect("the server answers")
+}
+
 fn respawn(workers: &mut [Child], k: usize, database: &str) {
     signal(&workers[k], "KILL");
     let _ = workers[k].wait();
@@ -71,16 +93,17 @@ async fn through_faults(database: &str, store: &Store, postgres: bool) -> (Strin
     let start = Instant::now();
     for round in 0u64.. {
         tokio::time::sleep(Duration::from_secs(2 + round % 2)).await;
-        let Ok(p) = store.progress(&id).await else {
+        let progress = store.progress(&id).await;
+        assert!(
+            start.elapsed() < Duration::from_secs(300),
+            "stuck: {progress:?} {f:?}"
+        );
+        let Ok(p) = progress else {
             continue; // the database is restarting
         };
         if p.done == JOBS as i64 {
             break;
         }
-        assert!(
-            start.elapsed() < Duration::from_secs(300),
-            "stuck: {p:?} {f:?}"
-        );
         if p.failed > 0 {
             let out = Command::new(BIN)
                 .args(["retry", &id, "--server", &server.url])
@@ -93,7 +116,11 @@ async fn through_faults(database: &str, store: &Store, postgres: bool) -> (Strin
             );
             f.retried += p.failed as u64;
         }
-        respawn(&mut workers, (round % 2) as usize, database);
+        let k = (round % 2) as usize;
+        if holds_a_job(store, workers[k].id()).await {
+            f.kills_mid_job += 1;
+        }
+        respawn(&mut workers, k, database);
         f.worker_kills += 1;
         if f.server_restarts == 0 && p.done > JOBS as i64 / 4 {
             server.kill();
@@ -101,10 +128,14 @@ async fn through_faults(database: &str, store: &Store, postgres: bool) -> (Strin
             f.server_restarts += 1;
         }
         if postgres && f.database_restarts == 0 && p.done > JOBS as i64 / 2 {
+            let before = postmaster_start(store).await;
             assert!(
                 restart_postgres(),
                 "pg_ctlcluster could not restart PostgreSQL"
             );
+            // It is the server under test that went down and came back.
+            let after = postmaster_start(store).await;
+            assert_ne!(before, after, "the test's PostgreSQL did not restart");
             f.database_restarts += 1;
         }
     }
@@ -125,17 +156,21 @@ async fn assert_done_once(store: &Store, id: &str) {
         (JOBS as i64, 0, 0, 0),
         "{p:?}"
     );
-    let (results, distinct): (i64, i64) = (
+    // One result in all for each job, and each job's own.
+    let (results, answered): (i64, i64) = (
         sqlx::query_scalar("SELECT COUNT(*) FROM results")
             .fetch_one(store.pool())
             .await
             .unwrap(),
-        sqlx::query_scalar("SELECT COUNT(DISTINCT sample_hash) FROM jobs")
-            .fetch_one(store.pool())
-            .await
-            .unwrap(),
+        sqlx::query_scalar(&format!(
+            "SELECT COUNT(*) FROM jobs j JOIN results r ON r.sample_hash = j.sample_hash \
+             WHERE j.sweep_id = '{id}'"
+        ))
+        .fetch_one(store.pool())
+        .await
+        .unwrap(),
     );
-    assert_eq!((results, distinct), (JOBS as i64, JOBS as i64));
+    assert_eq!((results, answered), (JOBS as i64, JOBS as i64));
     let running = store.points(id).await.unwrap();
     let recomputed = store.points_recomputed(id).await.unwrap();
     assert_eq!(running.len(), recomputed.len());
@@ -160,7 +195,7 @@ async fn every_job_ends_done_once_through_kills_on_sqlite() {
     let store = Store::open(&db).await.unwrap();
     let (id, f) = through_faults(&db, &store, false).await;
     assert_done_once(&store, &id).await;
-    assert!(f.worker_kills >= 3 && f.server_restarts == 1, "{f:?}");
+    assert!(f.kills_mid_job >= 3 && f.server_restarts == 1, "{f:?}");
     println!("SQLite: {JOBS} jobs done once through {f:?}");
 }
 
@@ -174,7 +209,7 @@ async fn every_job_ends_done_once_through_kills_and_a_restart_on_postgres() {
     let (id, f) = through_faults(&db, &store, true).await;
     assert_done_once(&store, &id).await;
     assert!(
-        f.worker_kills >= 3 && f.server_restarts == 1 && f.database_restarts == 1,
+        f.kills_mid_job >= 3 && f.server_restarts == 1 && f.database_restarts == 1,
         "{f:?}"
     );
     println!("PostgreSQL: {JOBS} jobs done once through {f:?}");
