@@ -62,6 +62,9 @@ async fn the_last_sample_takes_an_idle_workers_core_and_keeps_its_numbers() {
         .await
         .unwrap()
         .unwrap();
+    // The second core did share the sample's steps.
+    let shared = stored["counters"]["shared_steps"].as_u64().unwrap_or(0);
+    assert!(shared > 0, "{}", stored["counters"]);
     let scene: &Scene = &expanded[0].scene;
     assert_eq!(scene.numerics.threads, 1);
     let alone: RunReport = run(scene, &mut Quiet).unwrap();

@@ -36,9 +36,18 @@ async fn points_get_samples_until_their_standard_error_reaches_the_target() {
             tokio::spawn(run_worker(store.clone(), c, rx.clone()))
         })
         .collect();
+    let mut written = 0;
     for w in workers {
-        w.await.unwrap();
+        let tally = w.await.unwrap();
+        assert_eq!((tally.lost, tally.failed), (0, 0), "{tally:?}");
+        written += tally.completed;
     }
+    // Each job claimed once and its result written once.
+    let attempts: i64 = sqlx::query_scalar("SELECT MAX(attempts) FROM jobs")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(attempts, 1);
     let points = store.points(&created.id).await.unwrap();
     let counts = store.point_jobs(&created.id).await.unwrap();
     assert_eq!(points.len(), 2);
@@ -70,6 +79,8 @@ async fn points_get_samples_until_their_standard_error_reaches_the_target() {
         grown,
         "no point needed more than its first samples: {points:?}"
     );
+    let jobs: i64 = counts.iter().map(|c| c.jobs).sum();
+    assert_eq!(written as i64, jobs);
     let recomputed = store.points_recomputed(&created.id).await.unwrap();
     assert_eq!(
         points.iter().map(|p| p.samples).collect::<Vec<_>>(),

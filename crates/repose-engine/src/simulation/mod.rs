@@ -131,11 +131,31 @@ pub struct StageCounters {
     #[serde(default)]
     pub resting_steps: u64,
     pub steps: u64,
+    /// Force computations (one a step, and one as a run starts) whose
+    /// contacts were shared among threads (see [`Simulation::set_threads`];
+    /// a step with few listed pairs is not shared).
+    #[serde(default)]
+    pub shared_steps: u64,
 }
 
 impl StageCounters {
     pub fn total(&self) -> f64 {
         self.integrate + self.neighbours + self.contacts + self.walls
+    }
+}
+
+/// The counters of two runs (or two parts of one) summed.
+impl std::ops::AddAssign for StageCounters {
+    fn add_assign(&mut self, c: StageCounters) {
+        self.integrate += c.integrate;
+        self.neighbours += c.neighbours;
+        self.contacts += c.contacts;
+        self.walls += c.walls;
+        self.list_builds += c.list_builds;
+        self.particle_steps += c.particle_steps;
+        self.resting_steps += c.resting_steps;
+        self.steps += c.steps;
+        self.shared_steps += c.shared_steps;
     }
 }
 
@@ -388,6 +408,7 @@ where
         let t0 = Instant::now();
         if let Some(pool) = self.sharing() {
             self.shared_forces(&pool)?;
+            self.counters.shared_steps += 1;
             return Ok((t0.elapsed(), Duration::ZERO));
         }
         self.pair_forces()?;

@@ -192,14 +192,7 @@ fn pour_some<L: ContactLaw<3>, I: Integrator<3>>(
 fn merge(parts: &[PhaseThroughput], seconds: f64) -> PhaseThroughput {
     let mut counters = parts[0].counters;
     for p in &parts[1..] {
-        let c = &p.counters;
-        counters.integrate += c.integrate;
-        counters.neighbours += c.neighbours;
-        counters.contacts += c.contacts;
-        counters.walls += c.walls;
-        counters.list_builds += c.list_builds;
-        counters.particle_steps += c.particle_steps;
-        counters.steps += c.steps;
+        counters += p.counters;
     }
     PhaseThroughput {
         phase: "pour",
