@@ -10,6 +10,37 @@ use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 
+/// A server on a free loopback port with `header_read` for headers; its
+/// address, and a future that stops it and waits until it has.
+async fn start(
+    header_read: Duration,
+) -> (std::net::SocketAddr, impl std::future::Future<Output = ()>) {
+    let store = repose_testkit::sqlite("repose-slow").await;
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let limits = Limits {
+        header_read,
+        ..Default::default()
+    };
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let server = tokio::spawn(serve(
+        listener,
+        repose_api::app(store),
+        limits,
+        async move {
+            let _ = stopped.await;
+        },
+    ));
+    let stop = async move {
+        let _ = stop.send(());
+        tokio::time::timeout(Duration::from_secs(15), server)
+            .await
+            .expect("the server stops")
+            .unwrap();
+    };
+    (addr, stop)
+}
+
 async fn health(addr: std::net::SocketAddr) -> String {
     let mut s = TcpStream::connect(addr).await.unwrap();
     s.write_all(b"GET /api/health HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n")
@@ -48,22 +79,7 @@ async fn trickle(addr: std::net::SocketAddr) -> Duration {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_hundred_slow_clients_do_not_stop_health_answering() {
-    let store = repose_testkit::sqlite("repose-slow").await;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let limits = Limits {
-        header_read: Duration::from_secs(4),
-        ..Default::default()
-    };
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let server = tokio::spawn(serve(
-        listener,
-        repose_api::app(store),
-        limits,
-        async move {
-            let _ = stopped.await;
-        },
-    ));
+    let (addr, stop) = start(Duration::from_secs(4)).await;
     let slow: Vec<_> = (0..200).map(|_| tokio::spawn(trickle(addr))).collect();
     tokio::time::sleep(Duration::from_millis(500)).await;
     let asked = Instant::now();
@@ -82,11 +98,7 @@ async fn two_hundred_slow_clients_do_not_stop_health_answering() {
         assert!(held > answered, "{held:?} against {answered:?}");
         assert!(held >= Duration::from_secs(3), "{held:?}");
     }
-    let _ = stop.send(());
-    tokio::time::timeout(Duration::from_secs(15), server)
-        .await
-        .expect("the server stops")
-        .unwrap();
+    stop.await;
 }
 
 /// Sends `first` (maybe nothing), then stays silent; returns how long the
@@ -115,22 +127,7 @@ async fn silent_after(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn clients_that_go_silent_lose_their_connections() {
-    let store = repose_testkit::sqlite("repose-silent").await;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let limits = Limits {
-        header_read: Duration::from_secs(1),
-        ..Default::default()
-    };
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let server = tokio::spawn(serve(
-        listener,
-        repose_api::app(store),
-        limits,
-        async move {
-            let _ = stopped.await;
-        },
-    ));
+    let (addr, stop) = start(Duration::from_secs(1)).await;
     let cases: [(&str, &[u8]); 4] = [
         ("connects and sends nothing", b""),
         ("sends part of a request line", b"GET /api/he"),
@@ -147,9 +144,5 @@ async fn clients_that_go_silent_lose_their_connections() {
         let held = silent_after(addr, first, Duration::from_secs(8)).await;
         assert!(held.is_some(), "a client that {what} held its connection");
     }
-    let _ = stop.send(());
-    tokio::time::timeout(Duration::from_secs(15), server)
-        .await
-        .expect("the server stops")
-        .unwrap();
+    stop.await;
 }
