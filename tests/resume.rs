@@ -6,6 +6,7 @@
 //! saves the heap before it hands the job back, however long ago its last
 //! checkpoint was.
 
+use repose_physics::report::simulated_numbers;
 use repose_physics::{Quiet, Scene};
 use repose_store::Store;
 use repose_sweeps::SweepSpec;
@@ -55,26 +56,10 @@ fn worker_saving_every(database: &str, seconds: &str) -> Child {
         .expect("repose worker starts")
 }
 
-/// Every simulated number of a report (its timings left out), as the
-/// text JSON writes it: equal text means equal bits.
+/// Every simulated number of a report (how it was computed left out), as
+/// the text JSON writes it: equal text means equal bits.
 fn numbers(report: &str) -> Value {
-    let mut v: Value = serde_json::from_str(report).unwrap();
-    let o = v.as_object_mut().unwrap();
-    for timing in ["wall_time", "particle_steps_per_second"] {
-        o.remove(timing);
-    }
-    let c = o["counters"].as_object_mut().unwrap();
-    // How it was computed (the clock, the threads), not what.
-    for stage in [
-        "integrate",
-        "neighbours",
-        "contacts",
-        "walls",
-        "shared_steps",
-    ] {
-        c.remove(stage);
-    }
-    v
+    simulated_numbers(serde_json::from_str(report).unwrap())
 }
 
 async fn wait_for<T, F: std::future::Future<Output = Option<T>>>(

@@ -233,6 +233,29 @@ impl RunReport {
     }
 }
 
+/// Leaves out of a report's JSON what says how its run was computed (the
+/// clock's times, the threads that shared its steps) rather than what it
+/// computed: two runs of the same scene and seed then compare equal to the
+/// bit, on any machine and thread count.
+pub fn simulated_numbers(mut report: Value) -> Value {
+    if let Some(o) = report.as_object_mut() {
+        o.remove("wall_time");
+        o.remove("particle_steps_per_second");
+        if let Some(c) = o.get_mut("counters").and_then(Value::as_object_mut) {
+            for how in [
+                "integrate",
+                "neighbours",
+                "contacts",
+                "walls",
+                "shared_steps",
+            ] {
+                c.remove(how);
+            }
+        }
+    }
+    report
+}
+
 /// Reads a stored report in the current shape. Reports of version 0.1 kept
 /// each protocol's numbers in fields of their own (`repose`, `tilt`,
 /// `flux`, `surface`, `theory`); they are rewritten here, nothing dropped.

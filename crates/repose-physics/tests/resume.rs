@@ -6,6 +6,7 @@
 //! handed more threads partway (a worker lending an idle core) ends with
 //! the same numbers too.
 
+use repose_physics::report::simulated_numbers;
 use repose_physics::{run, Checkpoint, Observer, Progress, RunReport, Scene};
 use serde_json::Value;
 
@@ -116,24 +117,11 @@ fn scene(text: &str, extra: &[&str]) -> Scene {
     Scene::from_toml(text, &o).unwrap()
 }
 
-/// Every simulated number of a report: all but the wall-clock timings.
+/// Every simulated number of a report: all but how it was computed, and
+/// the scene it ran.
 fn numbers(r: &RunReport) -> Value {
-    let mut v = serde_json::to_value(r).unwrap();
-    let o = v.as_object_mut().unwrap();
-    for timing in ["wall_time", "particle_steps_per_second", "scene"] {
-        o.remove(timing);
-    }
-    let c = o["counters"].as_object_mut().unwrap();
-    // How it was computed (the clock, the threads), not what.
-    for stage in [
-        "integrate",
-        "neighbours",
-        "contacts",
-        "walls",
-        "shared_steps",
-    ] {
-        c.remove(stage);
-    }
+    let mut v = simulated_numbers(serde_json::to_value(r).unwrap());
+    v.as_object_mut().unwrap().remove("scene");
     v
 }
 
