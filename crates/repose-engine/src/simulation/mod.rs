@@ -30,7 +30,7 @@ mod state;
 
 pub use boundary::{Outlet, Periodic};
 pub use rest::RestRule;
-pub use state::{EngineState, StateOf};
+pub use state::{CountersFormat2, EngineState, SavedCounters, StateFormat2Of, StateOf};
 
 use crate::contact::ContactLaw;
 use crate::dim::{Dim, Space, Vector};

@@ -5,6 +5,12 @@
 //! the state. What the scene fixes — the laws, the walls, outlets and the
 //! periodic cell, the time step — is built again from the scene, and a
 //! restored engine then takes exactly the steps the saved one would have.
+//!
+//! The counters are kept as JSON text ([`SavedCounters`]): they are
+//! bookkeeping that grows a field now and then, and as text a counter added
+//! later neither breaks an older save nor is broken by it. Saves from
+//! before that ([`CountersFormat2`]) are read through
+//! [`EngineState::upgrade`].
 
 use super::{Guards, Simulation, StageCounters};
 use crate::contact::ContactLaw;
@@ -16,14 +22,15 @@ use crate::walls::WallContacts;
 use serde::{Deserialize, Serialize};
 
 /// The evolving part of a [`Simulation`] with contact histories `H` and
-/// integrator `I`.
+/// integrator `I`; its counters are encoded as `C`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct EngineState<const D: usize, H, I>
+pub struct EngineState<const D: usize, H, I, C = SavedCounters>
 where
     Dim<D>: Space<D>,
     H: Copy + Default + std::fmt::Debug + Serialize + serde::de::DeserializeOwned,
     I: Serialize + serde::de::DeserializeOwned,
+    C: Serialize + serde::de::DeserializeOwned,
 {
     particles: Particles<D>,
     integrator: I,
@@ -35,14 +42,122 @@ where
     time: f64,
     iteration: u64,
     removed: usize,
-    counters: StageCounters,
+    counters: C,
     max_overlap_seen: f64,
     primed: bool,
     sorted_at: Option<u64>,
 }
 
+/// [`StageCounters`] as JSON text inside a saved state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SavedCounters(pub StageCounters);
+
+impl Serialize for SavedCounters {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let text = serde_json::to_string(&self.0).map_err(serde::ser::Error::custom)?;
+        s.serialize_str(&text)
+    }
+}
+
+impl<'de> Deserialize<'de> for SavedCounters {
+    fn deserialize<De: serde::Deserializer<'de>>(d: De) -> Result<Self, De::Error> {
+        let text = String::deserialize(d)?;
+        let counters = serde_json::from_str(&text).map_err(serde::de::Error::custom)?;
+        Ok(SavedCounters(counters))
+    }
+}
+
+/// The counters as saves of format 2 laid them out, field by field (before
+/// the shared steps were counted).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CountersFormat2 {
+    integrate: f64,
+    neighbours: f64,
+    contacts: f64,
+    walls: f64,
+    list_builds: u64,
+    particle_steps: u64,
+    resting_steps: u64,
+    steps: u64,
+}
+
+/// What a format-2 save held of the counters: all but the shared steps.
+impl From<SavedCounters> for CountersFormat2 {
+    fn from(SavedCounters(c): SavedCounters) -> CountersFormat2 {
+        CountersFormat2 {
+            integrate: c.integrate,
+            neighbours: c.neighbours,
+            contacts: c.contacts,
+            walls: c.walls,
+            list_builds: c.list_builds,
+            particle_steps: c.particle_steps,
+            resting_steps: c.resting_steps,
+            steps: c.steps,
+        }
+    }
+}
+
+impl From<CountersFormat2> for SavedCounters {
+    fn from(c: CountersFormat2) -> SavedCounters {
+        SavedCounters(StageCounters {
+            integrate: c.integrate,
+            neighbours: c.neighbours,
+            contacts: c.contacts,
+            walls: c.walls,
+            list_builds: c.list_builds,
+            particle_steps: c.particle_steps,
+            resting_steps: c.resting_steps,
+            steps: c.steps,
+            shared_steps: 0,
+        })
+    }
+}
+
+impl<const D: usize, H, I, C> EngineState<D, H, I, C>
+where
+    Dim<D>: Space<D>,
+    H: Copy + Default + std::fmt::Debug + Serialize + serde::de::DeserializeOwned,
+    I: Serialize + serde::de::DeserializeOwned,
+    C: Serialize + serde::de::DeserializeOwned,
+{
+    /// The state with its counters in today's encoding.
+    pub fn upgrade(self) -> EngineState<D, H, I>
+    where
+        C: Into<SavedCounters>,
+    {
+        self.with_counters(Into::into)
+    }
+
+    /// The same state with its counters re-encoded by `f`.
+    pub fn with_counters<C2>(self, f: impl FnOnce(C) -> C2) -> EngineState<D, H, I, C2>
+    where
+        C2: Serialize + serde::de::DeserializeOwned,
+    {
+        EngineState {
+            particles: self.particles,
+            integrator: self.integrator,
+            neighbors: self.neighbors,
+            wall_contacts: self.wall_contacts,
+            walls: self.walls,
+            dt: self.dt,
+            guards: self.guards,
+            time: self.time,
+            iteration: self.iteration,
+            removed: self.removed,
+            counters: f(self.counters),
+            max_overlap_seen: self.max_overlap_seen,
+            primed: self.primed,
+            sorted_at: self.sorted_at,
+        }
+    }
+}
+
 /// The state of a simulation with law `L` and integrator `I`.
 pub type StateOf<const D: usize, L, I> = EngineState<D, <L as ContactLaw<D>>::History, I>;
+
+/// The same state as saves of format 2 encoded it.
+pub type StateFormat2Of<const D: usize, L, I> =
+    EngineState<D, <L as ContactLaw<D>>::History, I, CountersFormat2>;
 
 impl<const D: usize, L: ContactLaw<D>, I: Integrator<D>> Simulation<D, L, I>
 where
@@ -61,7 +176,7 @@ where
             time: self.time,
             iteration: self.iteration,
             removed: self.removed,
-            counters: self.counters,
+            counters: SavedCounters(self.counters),
             max_overlap_seen: self.max_overlap_seen,
             primed: self.primed,
             sorted_at: self.sorted_at,
@@ -96,7 +211,7 @@ where
         self.time = state.time;
         self.iteration = state.iteration;
         self.removed = state.removed;
-        self.counters = state.counters;
+        self.counters = state.counters.0;
         self.max_overlap_seen = state.max_overlap_seen;
         self.primed = state.primed;
         self.sorted_at = state.sorted_at;

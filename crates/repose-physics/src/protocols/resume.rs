@@ -15,6 +15,10 @@
 //! their type names without module paths, so that moving a type to another
 //! module keeps its checkpoints), the protocol and the seed. A checkpoint
 //! whose header does not match is set aside and the run starts over.
+//!
+//! Format 3 keeps the engine's counters as text, so that a counter added
+//! later does not make saved runs unreadable. Format 2 (the counters field
+//! by field) is still read, its engine state upgraded on the way.
 
 use crate::report::{Phase, TracePoint};
 use serde::{Deserialize, Serialize};
@@ -30,8 +34,12 @@ pub struct Checkpoint {
     pub state: Vec<u8>,
 }
 
-/// Version of the encoding; bump when a saved field changes.
-const FORMAT: u32 = 2;
+/// Version of the encoding; bump when a saved field changes, and keep
+/// reading the previous one (see [`decode`]).
+const FORMAT: u32 = 3;
+
+/// The earlier format still read: the engine's counters field by field.
+const FORMAT_2: u32 = 2;
 
 /// What must agree between the run that saved and the run that resumes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -109,10 +117,17 @@ pub(super) fn encode<E: Serialize, P: Serialize>(saved: &Saved<E, P>) -> Result<
     postcard::to_stdvec(saved).map_err(|e| e.to_string())
 }
 
-/// Decodes a saved run written by a run with the same `header`.
-pub(super) fn decode<E, P>(bytes: &[u8], header: &Header) -> Result<Saved<E, P>, String>
+/// Decodes a saved run written by a run with the same `header`, in this
+/// format or in format 2, whose engine state `Old` is turned into today's
+/// by `upgrade`.
+pub(super) fn decode<E, Old, P>(
+    bytes: &[u8],
+    header: &Header,
+    upgrade: impl FnOnce(Old) -> E,
+) -> Result<Saved<E, P>, String>
 where
     E: serde::de::DeserializeOwned,
+    Old: serde::de::DeserializeOwned,
     P: serde::de::DeserializeOwned,
 {
     let (found, _): (Header, _) =
@@ -121,13 +136,30 @@ where
         variant: bare(&found.variant),
         ..found
     };
-    if &found != header {
+    let format = found.format;
+    if (Header {
+        format,
+        ..header.clone()
+    }) != found
+        || ![FORMAT, FORMAT_2].contains(&format)
+    {
         return Err(format!(
             "the checkpoint was written by another build or scene ({} {} {} seed {}, format {})",
             found.engine, found.variant, found.protocol, found.seed, found.format
         ));
     }
-    postcard::from_bytes(bytes).map_err(|e| format!("unreadable checkpoint: {e}"))
+    let unreadable = |e: postcard::Error| format!("unreadable checkpoint (format {format}): {e}");
+    if format == FORMAT {
+        return postcard::from_bytes(bytes).map_err(unreadable);
+    }
+    let old: Saved<Old, P> = postcard::from_bytes(bytes).map_err(unreadable)?;
+    Ok(Saved {
+        header: header.clone(),
+        engine: upgrade(old.engine),
+        trace: old.trace,
+        wall_time: old.wall_time,
+        protocol: old.protocol,
+    })
 }
 
 /// A type name without its module paths: `a::b::Law<c::N, true>` becomes
@@ -168,6 +200,53 @@ mod tests {
         assert_ne!(bare(other), bare_old);
     }
 
+    /// A save with engine state `E` under a header of format `format`.
+    fn saved_in<E>(format: u32, engine: E) -> Saved<E, u32> {
+        Saved {
+            header: Header {
+                format,
+                ..Header::new("Law<A>, Verlet", "heap", 3)
+            },
+            engine,
+            trace: vec![SavedPoint {
+                iteration: 4,
+                time: 0.5,
+                kinetic_energy: 2.0,
+                max_speed: 1.0,
+                phase: "pour".into(),
+            }],
+            wall_time: 9.0,
+            protocol: 7,
+        }
+    }
+
+    #[test]
+    fn a_format_2_checkpoint_is_upgraded_and_other_formats_are_set_aside() {
+        let here = Header::new("Law<A>, Verlet", "heap", 3);
+        // Format 2's engine state (here a pair) becomes today's (a triple).
+        let bytes = encode(&saved_in(FORMAT_2, (1u8, 2u64))).unwrap();
+        let back: Saved<(u8, u64, u64), u32> =
+            decode(&bytes, &here, |(a, b): (u8, u64)| (a, b, 0)).unwrap();
+        assert_eq!(back.engine, (1, 2, 0));
+        assert_eq!(
+            (back.protocol, back.wall_time, back.trace.len()),
+            (7, 9.0, 1)
+        );
+        assert_eq!(back.header, here);
+        // Today's format is read as it is, never through the upgrade.
+        let bytes = encode(&saved_in(FORMAT, (1u8, 2u64, 3u64))).unwrap();
+        let back: Saved<(u8, u64, u64), u32> =
+            decode(&bytes, &here, |_: (u8, u64)| panic!("not an old save")).unwrap();
+        assert_eq!(back.engine, (1, 2, 3));
+        for other in [1, FORMAT + 1] {
+            let bytes = encode(&saved_in(other, (1u8, 2u64, 3u64))).unwrap();
+            let why = decode::<(u8, u64, u64), (u8, u64), u32>(&bytes, &here, |(a, b)| (a, b, 0))
+                .err()
+                .unwrap();
+            assert!(why.contains(&format!("format {other}")), "{why}");
+        }
+    }
+
     #[test]
     fn a_checkpoint_of_a_moved_law_is_read_and_one_of_another_law_is_not() {
         let saved = |variant: &str| Saved {
@@ -185,9 +264,9 @@ mod tests {
         };
         let bytes = encode(&saved("old::path::Law<old::A>, old::Verlet")).unwrap();
         let here = Header::new("new::path::Law<new::A>, new::Verlet", "heap", 3);
-        let back: Saved<f64, u32> = decode(&bytes, &here).unwrap();
+        let back: Saved<f64, u32> = decode(&bytes, &here, |old: f64| old).unwrap();
         assert_eq!((back.engine, back.protocol), (1.5, 7));
         let elsewhere = Header::new("new::path::Law<new::B>, new::Verlet", "heap", 3);
-        assert!(decode::<f64, u32>(&bytes, &elsewhere).is_err());
+        assert!(decode::<f64, f64, u32>(&bytes, &elsewhere, |old| old).is_err());
     }
 }

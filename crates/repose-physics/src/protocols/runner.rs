@@ -244,8 +244,11 @@ where
         bytes: &[u8],
         phases: &[Phase],
     ) -> Result<P, String> {
-        let saved: Saved<repose_engine::simulation::StateOf<D, L, I>, P> =
-            resume::decode(bytes, &self.header())?;
+        use repose_engine::simulation::{EngineState, StateFormat2Of, StateOf};
+        let saved: Saved<StateOf<D, L, I>, P> =
+            resume::decode(bytes, &self.header(), |old: StateFormat2Of<D, L, I>| {
+                EngineState::upgrade(old)
+            })?;
         let trace = saved
             .trace
             .iter()
