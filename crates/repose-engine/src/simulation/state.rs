@@ -81,22 +81,6 @@ pub struct CountersFormat2 {
     steps: u64,
 }
 
-/// What a format-2 save held of the counters: all but the shared steps.
-impl From<SavedCounters> for CountersFormat2 {
-    fn from(SavedCounters(c): SavedCounters) -> CountersFormat2 {
-        CountersFormat2 {
-            integrate: c.integrate,
-            neighbours: c.neighbours,
-            contacts: c.contacts,
-            walls: c.walls,
-            list_builds: c.list_builds,
-            particle_steps: c.particle_steps,
-            resting_steps: c.resting_steps,
-            steps: c.steps,
-        }
-    }
-}
-
 impl From<CountersFormat2> for SavedCounters {
     fn from(c: CountersFormat2) -> SavedCounters {
         SavedCounters(StageCounters {
