@@ -4,7 +4,8 @@
 //! (engine only, on the Gear integrator) and a 2D free run with friction, across a change of thread count, and a checkpoint that
 //! does not belong to the scene is set aside rather than trusted. A run
 //! handed more threads partway (a worker lending an idle core) ends with
-//! the same numbers too.
+//! the same numbers too. Checkpoints written by an earlier build (a kept
+//! one, and the previous format's engine state) are still read.
 
 use repose_physics::report::simulated_numbers;
 use repose_physics::{run, Checkpoint, Observer, Progress, RunReport, Scene};
@@ -311,4 +312,54 @@ fn an_engine_state_saved_in_format_2_goes_on_bit_for_bit() {
     assert!(whole.particles.vel.iter().any(|v| v.norm() > 0.0));
     assert_eq!(bits(&second), bits(&whole));
     assert_eq!(second.counters.steps, whole.counters.steps);
+}
+
+/// A checkpoint of a small cohesive heap written by an earlier build of
+/// this engine version, kept as `tests/fixtures/heap-checkpoint.bin`.
+const FIXTURE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/fixtures/heap-checkpoint.bin"
+);
+
+/// What a checkpoint holds can change without the engine's numbers
+/// changing (a counter added, say), and a build that cannot read the
+/// checkpoints of the one before sets aside hours of saved heaps. So a
+/// checkpoint written by an earlier build is kept here and must still be
+/// read and go on to the numbers of the uninterrupted run: a change to a
+/// saved field bumps `resume`'s format and keeps reading the previous one.
+/// A new engine version (whose checkpoints are set aside by design) writes
+/// the fixture anew: `REPOSE_WRITE_FIXTURES=1 cargo test --test resume`.
+#[test]
+fn a_checkpoint_written_by_an_earlier_build_is_still_read() {
+    let base = scene(HEAP, &[]);
+    let mut all = Recorder {
+        every: true,
+        ..Recorder::default()
+    };
+    let whole = run(&base, &mut all).unwrap();
+    assert!(whole.outcome.is_completed(), "{:?}", whole.outcome);
+    if std::env::var_os("REPOSE_WRITE_FIXTURES").is_some() {
+        let middle = &all.kept[all.kept.len() / 2];
+        std::fs::write(FIXTURE, &middle.state).unwrap();
+    }
+    let state = std::fs::read(FIXTURE).expect("the kept checkpoint");
+    let kept = Checkpoint {
+        time: 0.0,
+        iteration: 0,
+        state,
+    };
+    let (again, obs) = resumed_from(&base, &kept);
+    let step = match obs.resumed.as_slice() {
+        [Ok(step)] => *step,
+        other => panic!(
+            "the kept checkpoint was not read ({other:?}): a change to what checkpoints hold \
+             needs a new format that still reads the old; a new engine version, the fixture \
+             written anew"
+        ),
+    };
+    assert!(step > 0 && step < whole.iterations, "{step}");
+    assert!(
+        numbers(&again) == numbers(&whole),
+        "resumed at step {step}: the numbers differ"
+    );
 }
