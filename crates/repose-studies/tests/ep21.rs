@@ -650,3 +650,52 @@ fn a_missing_heap_is_set_against_where_eq4_carries_the_papers_last_heaps() {
         assert!(c.reason.ends_with(&ending), "{}", c.reason);
     }
 }
+
+/// Eq. 2's α = ½ is what θ_r depending on Bo alone gives; the α row sets
+/// heaps at the same Bo but of other sizes side by side. Heaps made with
+/// α = 0.3 stand steeper for the smaller grains at the same Bo; heaps made
+/// with α = ½ do not.
+#[test]
+fn the_exponent_row_compares_heaps_at_the_same_bond_number() {
+    let flat = row(
+        &(ep21::PAPER.compare)(&study(heaps(0.447, curves::D_EARTH_UM, 0.3))),
+        "criterion: α (eq. 2)",
+    );
+    assert_eq!(flat.verdict, "differs", "{flat:?}");
+    assert!(
+        flat.reason
+            .contains("θ_r is not a function of Bo alone here"),
+        "{}",
+        flat.reason
+    );
+    // The first pair named is of the most different sizes, 25 µm at
+    // g̃ = 100 against 1 mm at g̃ = 0.063 (Bo 0.8 % apart), with the
+    // difference eq. 1 gives them.
+    let first = flat
+        .reason
+        .split(" pairs of points whose Bo agree within 5 % (")
+        .nth(1);
+    let words: Vec<&str> = first.expect("pairs are named").split(' ').collect();
+    assert_eq!(
+        (words[0], words[4], words[9], words[13]),
+        ("25", "100", "1000", "0.063;"),
+        "{words:?}"
+    );
+    let diff: f64 = words[5].trim_end_matches('°').parse().unwrap();
+    let eq1 =
+        |d: f64, g: f64| (curves::EQ1.f)(d, &[0.447, curves::D_EARTH_UM * f64::powf(g, -0.3)]);
+    let expected = eq1(25.0, 100.0) - eq1(1000.0, 0.063);
+    assert!((diff - expected).abs() < 0.5, "{diff} against {expected}");
+    let collapsed = row(
+        &(ep21::PAPER.compare)(&study(heaps(0.447, curves::D_EARTH_UM, 0.5))),
+        "criterion: α (eq. 2)",
+    );
+    assert_eq!(collapsed.verdict, "agrees", "{collapsed:?}");
+    assert!(
+        collapsed
+            .reason
+            .contains("θ_r depends on Bo alone here within the error"),
+        "{}",
+        collapsed.reason
+    );
+}

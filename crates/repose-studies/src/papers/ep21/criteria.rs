@@ -9,7 +9,9 @@
 //! keep the headline reading by columns, and each criterion names the
 //! reading it used.
 
-use super::compare::{dry_mean, eq1_fit, eq2_fit, eq4_fit, fitted, no_result, packing_fit};
+use super::compare::{
+    bond_collapse, dry_mean, eq1_fit, eq2_fit, eq4_fit, fitted, no_result, packing_fit,
+};
 use super::curves::{ALPHA, BETA, D_EARTH_UM, D_PHI_UM, EQ1, MU_INF, MU_INF_BOND, PHI_INF};
 use super::figures::on_earth;
 use super::quantities::{
@@ -183,8 +185,9 @@ fn exponent(heaps: &SweepData, angle: &str, eq1: &Result<Fit, String>) -> Compar
         })
         .unwrap_or_default();
     let reason = format!(
-        "{}; D of each gravity level fitted with {held}{papers}",
-        row.reason
+        "{}; D of each gravity level fitted with {held}{papers}{}",
+        row.reason,
+        bond_collapse(heaps, angle)
     );
     Comparison { reason, ..row }
 }
