@@ -16,11 +16,12 @@
 # (dry heaps, packed columns) run first and each sweep's samples cheapest
 # first (large grains, strong gravity), ahead of any sweep an earlier run
 # left queued, so that a run stopped early has finished the most points.
-# While the reproduction is unfinished the store is kept in the repository
-# (a copy made by `repose backup` after the run stopped), so that it goes
-# on from its last checkpoints on the next machine. `scripts/ep21-glass.sh
-# --interim` writes the report from the samples finished so far, running
-# none, with an estimate of what is left.
+# The store is kept in the repository (a copy made by `repose backup`
+# after the run stopped): an unfinished run goes on from its last
+# checkpoints on the next machine, and a finished one writes the report
+# again in seconds, running nothing. `scripts/ep21-glass.sh --interim`
+# writes the report from the samples finished so far, running none, with
+# an estimate of what is left.
 #
 # Environment: REPOSE (the program), STORE (the SQLite store); further
 # arguments go to `repose reproduce` (e.g. --workers 1, or --first
