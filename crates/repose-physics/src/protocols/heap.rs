@@ -3,6 +3,7 @@
 //! the two side views of the settled heap.
 
 use super::pour::{self, Placer, PourJob, Region, Scales};
+use super::resume::SavedProtocol;
 use super::runner::{Findings, Runner, Stop};
 use super::{Metric, Observer, Protocol};
 use crate::measure::Profile;
@@ -276,14 +277,15 @@ impl EngineJob<3> for PourJob<'_, HeapSpec> {
         let sim = plate::<L, I>(self.scene, &self.spec, self.scales.d, laws);
         let s = self.scales;
         let mut run = pour::runner(self.scene, &s, self.observer, sim, self.spec.height);
-        let state = run
-            .resume(&[POUR, SETTLE])
-            .unwrap_or_else(|| PourState::new(self.scene.seed));
+        let (state, left) = run
+            .resume::<(PourState, u64)>(&[POUR, SETTLE])
+            .unwrap_or_else(|| (PourState::new(self.scene.seed), 0));
         let mut pour = Pour {
             spec: &self.spec,
             scales: s,
             grains: &self.grains,
             state,
+            left,
         };
         let mut findings = Findings::default();
         let outcome = match pour.pour_and_settle(&mut run) {
@@ -328,6 +330,9 @@ struct Pour<'a> {
     scales: Scales,
     grains: &'a Grains,
     state: PourState,
+    /// Steps still to run before the next insertion: a checkpoint taken
+    /// between two insertions saves them beside the state.
+    left: u64,
 }
 
 /// What the pour carries from one insertion to the next besides the
@@ -365,6 +370,16 @@ impl PourState {
     }
 }
 
+/// The pour's state as a checkpoint holds it: the state at the last
+/// insertion and the steps left before the next (formats 2 and 3 saved
+/// only at insertions, so the state alone).
+impl SavedProtocol for (PourState, u64) {
+    type Format3 = PourState;
+    fn upgrade(state: PourState) -> Self {
+        (state, 0)
+    }
+}
+
 impl Pour<'_> {
     fn pour_and_settle<L: ContactLaw<3>, I: Integrator<3>>(
         &mut self,
@@ -372,31 +387,14 @@ impl Pour<'_> {
     ) -> Result<(), Outcome> {
         let s = self.scales;
         let steps = ((self.spec.interval * s.time / run.sim.dt).round() as u64).max(1);
-        while self.state.inserted < self.spec.max_grains && !self.state.steady {
-            run.checkpoint(&self.state);
-            self.read_angle(&run.sim.particles);
-            if self.state.steady {
-                break;
+        loop {
+            if self.left == 0 {
+                if !self.insert_next(run)? {
+                    break;
+                }
+                self.left = steps;
             }
-            let (crest, resting) = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
-            let t = run.sim.time / s.time;
-            self.state.crest.push([t, crest / s.d]);
-            self.state.heap.push([t, resting as f64]);
-            let top = self.spec.height * s.d;
-            if crest > top - s.d {
-                return Err(Outcome::Unmeasurable {
-                    reason: format!(
-                        "the heap's crest reached the top of the domain ({:.1} d) after {} grains: no heap forms at this cohesion (regime I of Elekes & Parteli)",
-                        self.spec.height, self.state.inserted
-                    ),
-                });
-            }
-            let added = self.insert(&mut run.sim, crest.max(self.spec.inlet_floor * s.d));
-            if added > 0 {
-                self.state.last_insertion = run.sim.time;
-            }
-            run.advance(POUR, steps)
-                .map_err(|stop| stop.outcome(POUR, String::new))?;
+            self.pour_for(run)?;
         }
         let rest = pour::Rest {
             energy: s.rest_energy(self.spec.rest_energy),
@@ -404,7 +402,8 @@ impl Pour<'_> {
         };
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let since = self.state.last_insertion;
-        pour::settle(run, SETTLE, since, window, rest, &self.state).map_err(|stop: Stop| {
+        let saved = (&self.state, 0u64);
+        pour::settle(run, SETTLE, since, window, rest, &saved).map_err(|stop: Stop| {
             stop.outcome(SETTLE, || {
                 let exempt = match self.spec.rest_exempt {
                     0.0 => String::new(),
@@ -416,6 +415,62 @@ impl Pour<'_> {
                 )
             })
         })
+    }
+
+    /// At an insertion, a resumable point: reads the angle if due, stops
+    /// a heap whose crest reached the top and inserts the next grains.
+    /// False once the pour is over (all grains poured, or the angle steady).
+    fn insert_next<L: ContactLaw<3>, I: Integrator<3>>(
+        &mut self,
+        run: &mut Runner<'_, 3, L, I>,
+    ) -> Result<bool, Outcome> {
+        if self.state.inserted >= self.spec.max_grains || self.state.steady {
+            return Ok(false);
+        }
+        run.checkpoint(&(&self.state, 0u64));
+        self.read_angle(&run.sim.particles);
+        if self.state.steady {
+            return Ok(false);
+        }
+        let s = self.scales;
+        let (crest, resting) = crest(&run.sim.particles, 0.5 * (s.g * s.d).sqrt());
+        let t = run.sim.time / s.time;
+        self.state.crest.push([t, crest / s.d]);
+        self.state.heap.push([t, resting as f64]);
+        let top = self.spec.height * s.d;
+        if crest > top - s.d {
+            return Err(Outcome::Unmeasurable {
+                reason: format!(
+                    "the heap's crest reached the top of the domain ({:.1} d) after {} grains: no heap forms at this cohesion (regime I of Elekes & Parteli)",
+                    self.spec.height, self.state.inserted
+                ),
+            });
+        }
+        let added = self.insert(&mut run.sim, crest.max(self.spec.inlet_floor * s.d));
+        if added > 0 {
+            self.state.last_insertion = run.sim.time;
+        }
+        Ok(true)
+    }
+
+    /// Runs the steps left before the next insertion a check at a time,
+    /// each check a resumable point, so that a run asked to stop saves
+    /// within a check instead of an interval between insertions (the
+    /// same steps and samples as one stretch: every number is the same).
+    fn pour_for<L: ContactLaw<3>, I: Integrator<3>>(
+        &mut self,
+        run: &mut Runner<'_, 3, L, I>,
+    ) -> Result<(), Outcome> {
+        while self.left > 0 {
+            let chunk = run.check_steps.min(self.left);
+            run.advance(POUR, chunk)
+                .map_err(|stop| stop.outcome(POUR, String::new))?;
+            self.left -= chunk;
+            if self.left > 0 {
+                run.checkpoint(&(&self.state, self.left));
+            }
+        }
+        Ok(())
     }
 
     /// At each multiple of `steady_every` grains poured, reads the angle of

@@ -16,9 +16,12 @@
 //! module keeps its checkpoints), the protocol and the seed. A checkpoint
 //! whose header does not match is set aside and the run starts over.
 //!
-//! Format 3 keeps the engine's counters as text, so that a counter added
-//! later does not make saved runs unreadable. Format 2 (the counters field
-//! by field) is still read, its engine state upgraded on the way.
+//! Format 4 lets a protocol's own state grow (the pour saves how far it
+//! is through the interval between two insertions, so that it can stop
+//! between them). Format 3 (the protocol's state as it was) and format 2
+//! (the engine's counters field by field) are still read, upgraded on the
+//! way; since format 3 the counters are text, so that a counter added
+//! later does not make saved runs unreadable.
 
 use crate::report::{Phase, TracePoint};
 use serde::{Deserialize, Serialize};
@@ -36,10 +39,27 @@ pub struct Checkpoint {
 
 /// Version of the encoding; bump when a saved field changes, and keep
 /// reading the previous one (see [`decode`]).
-const FORMAT: u32 = 3;
+const FORMAT: u32 = 4;
 
-/// The earlier format still read: the engine's counters field by field.
+/// The format before: the protocols' own states as they were.
+const FORMAT_3: u32 = 3;
+
+/// The format before that: the engine's counters field by field as well.
 const FORMAT_2: u32 = 2;
+
+/// A protocol's own state in a checkpoint, and how formats 2 and 3 held it.
+pub trait SavedProtocol: Serialize + serde::de::DeserializeOwned {
+    /// The state as formats 2 and 3 laid it out.
+    type Format3: serde::de::DeserializeOwned;
+    /// Today's state of a run saved in format 2 or 3.
+    fn upgrade(old: Self::Format3) -> Self;
+}
+
+/// The state of a protocol that keeps none of its own.
+impl SavedProtocol for () {
+    type Format3 = ();
+    fn upgrade(_: ()) {}
+}
 
 /// What must agree between the run that saved and the run that resumes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -118,8 +138,9 @@ pub(super) fn encode<E: Serialize, P: Serialize>(saved: &Saved<E, P>) -> Result<
 }
 
 /// Decodes a saved run written by a run with the same `header`, in this
-/// format or in format 2, whose engine state `Old` is turned into today's
-/// by `upgrade`.
+/// format or in formats 3 and 2: their protocol state is upgraded by
+/// [`SavedProtocol::upgrade`], and format 2's engine state `Old` turned
+/// into today's by `upgrade`.
 pub(super) fn decode<E, Old, P>(
     bytes: &[u8],
     header: &Header,
@@ -128,7 +149,7 @@ pub(super) fn decode<E, Old, P>(
 where
     E: serde::de::DeserializeOwned,
     Old: serde::de::DeserializeOwned,
-    P: serde::de::DeserializeOwned,
+    P: SavedProtocol,
 {
     let (found, _): (Header, _) =
         postcard::take_from_bytes(bytes).map_err(|e| format!("unreadable checkpoint: {e}"))?;
@@ -141,7 +162,7 @@ where
         format,
         ..header.clone()
     }) != found
-        || ![FORMAT, FORMAT_2].contains(&format)
+        || ![FORMAT, FORMAT_3, FORMAT_2].contains(&format)
     {
         return Err(format!(
             "the checkpoint was written by another build or scene ({} {} {} seed {}, format {})",
@@ -152,14 +173,29 @@ where
     if format == FORMAT {
         return postcard::from_bytes(bytes).map_err(unreadable);
     }
-    let old: Saved<Old, P> = postcard::from_bytes(bytes).map_err(unreadable)?;
-    Ok(Saved {
-        header: header.clone(),
-        engine: upgrade(old.engine),
-        trace: old.trace,
-        wall_time: old.wall_time,
-        protocol: old.protocol,
-    })
+    if format == FORMAT_3 {
+        let old: Saved<E, P::Format3> = postcard::from_bytes(bytes).map_err(unreadable)?;
+        return Ok(old.upgraded(header, |engine| engine));
+    }
+    let old: Saved<Old, P::Format3> = postcard::from_bytes(bytes).map_err(unreadable)?;
+    Ok(old.upgraded(header, upgrade))
+}
+
+impl<E, P> Saved<E, P> {
+    /// The run in today's format, under `header`.
+    fn upgraded<F, Q: SavedProtocol<Format3 = P>>(
+        self,
+        header: &Header,
+        engine: impl FnOnce(E) -> F,
+    ) -> Saved<F, Q> {
+        Saved {
+            header: header.clone(),
+            engine: engine(self.engine),
+            trace: self.trace,
+            wall_time: self.wall_time,
+            protocol: Q::upgrade(self.protocol),
+        }
+    }
 }
 
 /// A type name without its module paths: `a::b::Law<c::N, true>` becomes
@@ -200,8 +236,23 @@ mod tests {
         assert_ne!(bare(other), bare_old);
     }
 
-    /// A save with engine state `E` under a header of format `format`.
-    fn saved_in<E>(format: u32, engine: E) -> Saved<E, u32> {
+    /// A protocol state that gained a field in format 4.
+    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    struct Grown {
+        kept: u32,
+        added: u64,
+    }
+
+    impl SavedProtocol for Grown {
+        type Format3 = u32;
+        fn upgrade(kept: u32) -> Grown {
+            Grown { kept, added: 0 }
+        }
+    }
+
+    /// A save with engine state `E` and protocol state `P` under a header
+    /// of format `format`.
+    fn saved_in<E, P>(format: u32, engine: E, protocol: P) -> Saved<E, P> {
         Saved {
             header: Header {
                 format,
@@ -216,31 +267,38 @@ mod tests {
                 phase: "pour".into(),
             }],
             wall_time: 9.0,
-            protocol: 7,
+            protocol,
         }
     }
 
+    type Today = Saved<(u8, u64, u64), Grown>;
+
     #[test]
-    fn a_format_2_checkpoint_is_upgraded_and_other_formats_are_set_aside() {
+    fn formats_2_and_3_are_upgraded_and_other_formats_are_set_aside() {
         let here = Header::new("Law<A>, Verlet", "heap", 3);
-        // Format 2's engine state (here a pair) becomes today's (a triple).
-        let bytes = encode(&saved_in(FORMAT_2, (1u8, 2u64))).unwrap();
-        let back: Saved<(u8, u64, u64), u32> =
-            decode(&bytes, &here, |(a, b): (u8, u64)| (a, b, 0)).unwrap();
+        let not_old = |_: (u8, u64)| -> (u8, u64, u64) { panic!("not a format-2 save") };
+        // Format 2: the engine state (here a pair) becomes today's (a
+        // triple), and the protocol's state gains its field.
+        let bytes = encode(&saved_in(FORMAT_2, (1u8, 2u64), 7u32)).unwrap();
+        let back: Today = decode(&bytes, &here, |(a, b): (u8, u64)| (a, b, 0)).unwrap();
         assert_eq!(back.engine, (1, 2, 0));
-        assert_eq!(
-            (back.protocol, back.wall_time, back.trace.len()),
-            (7, 9.0, 1)
-        );
+        assert_eq!(back.protocol, Grown { kept: 7, added: 0 });
+        assert_eq!((back.wall_time, back.trace.len()), (9.0, 1));
         assert_eq!(back.header, here);
-        // Today's format is read as it is, never through the upgrade.
-        let bytes = encode(&saved_in(FORMAT, (1u8, 2u64, 3u64))).unwrap();
-        let back: Saved<(u8, u64, u64), u32> =
-            decode(&bytes, &here, |_: (u8, u64)| panic!("not an old save")).unwrap();
+        // Format 3: today's engine state, the protocol's upgraded.
+        let bytes = encode(&saved_in(FORMAT_3, (1u8, 2u64, 3u64), 7u32)).unwrap();
+        let back: Today = decode(&bytes, &here, not_old).unwrap();
         assert_eq!(back.engine, (1, 2, 3));
+        assert_eq!(back.protocol, Grown { kept: 7, added: 0 });
+        assert_eq!(back.header, here);
+        // Today's format is read as it is, never through an upgrade.
+        let grown = Grown { kept: 7, added: 9 };
+        let bytes = encode(&saved_in(FORMAT, (1u8, 2u64, 3u64), grown)).unwrap();
+        let back: Today = decode(&bytes, &here, not_old).unwrap();
+        assert_eq!((back.engine, back.protocol.added), ((1, 2, 3), 9));
         for other in [1, FORMAT + 1] {
-            let bytes = encode(&saved_in(other, (1u8, 2u64, 3u64))).unwrap();
-            let why = decode::<(u8, u64, u64), (u8, u64), u32>(&bytes, &here, |(a, b)| (a, b, 0))
+            let bytes = encode(&saved_in(other, (1u8, 2u64, 3u64), 7u32)).unwrap();
+            let why = decode::<_, _, Grown>(&bytes, &here, |(a, b): (u8, u64)| (a, b, 0u64))
                 .err()
                 .unwrap();
             assert!(why.contains(&format!("format {other}")), "{why}");
@@ -260,13 +318,13 @@ mod tests {
             engine: 1.5f64,
             trace: Vec::new(),
             wall_time: 0.0,
-            protocol: 7u32,
+            protocol: (),
         };
         let bytes = encode(&saved("old::path::Law<old::A>, old::Verlet")).unwrap();
         let here = Header::new("new::path::Law<new::A>, new::Verlet", "heap", 3);
-        let back: Saved<f64, u32> = decode(&bytes, &here, |old: f64| old).unwrap();
-        assert_eq!((back.engine, back.protocol), (1.5, 7));
+        let back: Saved<f64, ()> = decode(&bytes, &here, |old: f64| old).unwrap();
+        assert_eq!(back.engine, 1.5);
         let elsewhere = Header::new("new::path::Law<new::B>, new::Verlet", "heap", 3);
-        assert!(decode::<f64, f64, u32>(&bytes, &elsewhere, |old| old).is_err());
+        assert!(decode::<f64, f64, ()>(&bytes, &elsewhere, |old| old).is_err());
     }
 }

@@ -2,7 +2,7 @@
 //! kinetic energy and let the observer stop the run, turn early stops into
 //! outcomes, and assemble the report.
 
-use super::resume::{self, Checkpoint, Header, Saved, SavedPoint};
+use super::resume::{self, Checkpoint, Header, Saved, SavedPoint, SavedProtocol};
 use crate::report::{
     ContactForce, Curve, FinalState, GrainCounts, Options, Outcome, Phase, Profile, Quantity,
     RunReport, TracePoint, ENGINE,
@@ -14,7 +14,6 @@ use repose_engine::integrate::Integrator;
 use repose_engine::particles::Particles;
 use repose_engine::simulation::{Blowup, Simulation};
 use repose_engine::walls::{Wall, WallSpec};
-use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -228,7 +227,7 @@ where
     /// phases are among `phases`) and returns the protocol's state. A
     /// checkpoint that does not fit is set aside, the observer told why,
     /// and the run starts from the beginning.
-    pub fn resume<P: DeserializeOwned>(&mut self, phases: &[Phase]) -> Option<P> {
+    pub fn resume<P: SavedProtocol>(&mut self, phases: &[Phase]) -> Option<P> {
         let checkpoint = self.observer.saved()?;
         let result = self.restore::<P>(&checkpoint.state, phases);
         let answer = result
@@ -239,11 +238,7 @@ where
         result.ok()
     }
 
-    fn restore<P: DeserializeOwned>(
-        &mut self,
-        bytes: &[u8],
-        phases: &[Phase],
-    ) -> Result<P, String> {
+    fn restore<P: SavedProtocol>(&mut self, bytes: &[u8], phases: &[Phase]) -> Result<P, String> {
         use repose_engine::simulation::{EngineState, StateFormat2Of, StateOf};
         let saved: Saved<StateOf<D, L, I>, P> =
             resume::decode(bytes, &self.header(), |old: StateFormat2Of<D, L, I>| {
