@@ -153,10 +153,15 @@ fn point_matches_its_samples(p: &Value, samples: &[Value], series: &[Value]) {
 
 /// Cheap jobs: one grain dropped on a floor for a few milliseconds.
 fn cheap_sweep(samples: u32) -> SweepSpec {
+    sweep_lasting(samples, 0.02)
+}
+
+/// One grain dropped on a floor for `duration` simulated seconds, `samples` times.
+fn sweep_lasting(samples: u32, duration: f64) -> SweepSpec {
     serde_json::from_value(json!({
         "protocol": "free_run",
         "base": {
-            "duration": 0.02,
+            "duration": duration,
             "particles": [{"position": [0.0, 0.3], "radius": 0.1}],
             "walls": [{"point": [0.0, 0.0], "normal": [0.0, 1.0]}]
         },
@@ -209,7 +214,10 @@ async fn worker_processes_on_postgres_share_the_jobs_and_do_each_once() {
     // there to claim when the sweep arrives.
     let workers: Vec<Child> = (0..4).map(|_| worker(&url, &[])).collect();
     tokio::time::sleep(Duration::from_secs(1)).await;
-    let spec = cheap_sweep(60);
+    // Long enough (some 50 ms a job) that the sweep outlasts the idle
+    // workers' 0.5 s between looks at the queue: with the cheapest jobs the
+    // first worker to look could finish all 60 before the others wake.
+    let spec = sweep_lasting(60, 5.0);
     let (created, jobs) = create(&store, &spec, 3).await;
     let start = Instant::now();
     while store.progress(&created.id).await.unwrap().done < 60 {
