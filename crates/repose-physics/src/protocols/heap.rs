@@ -402,7 +402,7 @@ impl Pour<'_> {
         };
         let window = (self.spec.settle_min * s.time, self.spec.settle_max * s.time);
         let since = self.state.last_insertion;
-        let saved = (&self.state, 0u64);
+        let saved = (&self.state, self.left);
         pour::settle(run, SETTLE, since, window, rest, &saved).map_err(|stop: Stop| {
             stop.outcome(SETTLE, || {
                 let exempt = match self.spec.rest_exempt {
@@ -427,7 +427,7 @@ impl Pour<'_> {
         if self.state.inserted >= self.spec.max_grains || self.state.steady {
             return Ok(false);
         }
-        run.checkpoint(&(&self.state, 0u64));
+        run.checkpoint(&(&self.state, self.left));
         self.read_angle(&run.sim.particles);
         if self.state.steady {
             return Ok(false);
