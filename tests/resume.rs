@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 #[path = "common/mod.rs"]
 mod common;
 
-use common::{create, scratch, signal, BIN};
+use common::{create, scratch, signal, Server, BIN};
 
 /// A heap of a few seconds: 3000 grains poured on a 20 d plate.
 fn spec() -> SweepSpec {
@@ -219,6 +219,7 @@ async fn a_heap_handed_back_on_sigterm_is_saved_first_and_resumes_bit_for_bit() 
         .expect("a checkpoint saved on the way out");
     let p = store.progress(&created.id).await.unwrap();
     assert_eq!((p.queued, p.running, p.done), (1, 0, 0));
+    let grains = saved_grains_served(&database, &job);
 
     let log = finish(&store, &created.id, worker_saving_every(&database, "600")).await;
     assert!(
@@ -234,8 +235,73 @@ async fn a_heap_handed_back_on_sigterm_is_saved_first_and_resumes_bit_for_bit() 
         .unwrap();
     let whole = uninterrupted(&store).await;
     assert!(saved.iteration > 0 && (saved.iteration as u64) < whole.iterations);
+    // Stopped mid-pour: fewer grains than the whole run poured.
+    let poured = whole.metric("grains_poured").unwrap();
+    assert!(
+        grains > 0 && (grains as f64) < poured,
+        "{grains} of {poured}"
+    );
     assert!(
         numbers(&stored) == numbers(&serde_json::to_string(&whole).unwrap()),
         "the resumed result differs from the uninterrupted run"
     );
+}
+
+/// Where the grains of `job`'s checkpoint are, read through the server
+/// (`repose grains`) without resuming it: checked against the scene (below
+/// the domain's top, most over the plate, every radius the scene's)
+/// and handed to `repose measure-heap`, which reads a heap from it.
+/// Returns how many grains the checkpoint holds.
+fn saved_grains_served(database: &str, job: &str) -> usize {
+    let server = Server::start(database, 0);
+    let out = scratch("grains.txt");
+    let run = |args: &[&str]| {
+        Command::new(BIN)
+            .args(args)
+            .args(["--server", &server.url])
+            .output()
+            .unwrap()
+    };
+    let written = run(&["grains", job, "-o", out.to_str().unwrap()]);
+    assert!(written.status.success(), "{written:?}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let d = 1e-3;
+    let rows: Vec<Vec<f64>> = (text.lines())
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(
+        text.starts_with(&format!("# job {job}: checkpoint at ")),
+        "{text}"
+    );
+    for g in &rows {
+        assert!(g.len() == 4 && g[2] < 30.0 * d && g[3] == d / 2.0, "{g:?}");
+    }
+    // Most lie over the plate (a few roll off its edges and fall).
+    let over = |g: &&Vec<f64>| g[0].abs() < 10.0 * d && g[1].abs() < 10.0 * d && g[2] > 0.0;
+    let on = rows.iter().filter(over).count();
+    assert!(
+        10 * on >= 9 * rows.len(),
+        "{on} of {} over the plate",
+        rows.len()
+    );
+    let measured = Command::new(BIN)
+        .args([
+            "measure-heap",
+            "--diameter",
+            "1e-3",
+            "--plate",
+            "20",
+            "--json",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(measured.status.success(), "{measured:?}");
+    let metrics: Value = serde_json::from_slice(&measured.stdout).unwrap();
+    assert!(metrics["heap_grains"].as_f64().unwrap() > 0.0, "{metrics}");
+    let unknown = run(&["grains", "no-such-job"]);
+    assert!(!unknown.status.success());
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("no job with that id"));
+    rows.len()
 }

@@ -22,6 +22,7 @@
 //! an unknown sweep is 404. Only a failing database gives a 5xx.
 
 pub mod access;
+mod jobs;
 pub mod openapi;
 pub mod server;
 mod studies;
@@ -146,6 +147,7 @@ fn routes() -> Router<AppState> {
             get(studies::sweep_figure),
         )
         .route("/api/samples/{hash}", get(sweeps::sample_report))
+        .route("/api/jobs/{id}/grains", get(jobs::grains))
         .fallback(not_found)
         .method_not_allowed_fallback(method_not_allowed)
 }

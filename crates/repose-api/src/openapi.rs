@@ -46,6 +46,7 @@ use utoipa::OpenApi;
         crate::sweeps::points,
         crate::sweeps::series,
         crate::sweeps::sample_report,
+        crate::jobs::grains,
     )
 )]
 pub struct ApiDoc;

@@ -82,6 +82,8 @@ struct Draft {
 struct Real {
     sweep: String,
     hashes: Vec<String>,
+    /// A job of the sweep whose sample has a checkpoint.
+    job: String,
     /// Sweeps this test queued and has not cancelled yet: the ones it may
     /// cancel (a cancelled sweep can no longer be retried, so the finished
     /// one is never cancelled).
@@ -568,6 +570,9 @@ impl Run {
                 let k = g.below(self.real.queued.len());
                 BTreeMap::from([("id".into(), self.real.queued.swap_remove(k))])
             }
+            ["id"] if op.path.starts_with("/api/jobs/") => {
+                BTreeMap::from([("id".into(), self.real.job.clone())])
+            }
             ["id"] => BTreeMap::from([("id".into(), self.real.sweep.clone())]),
             ["hash"] => BTreeMap::from([("hash".into(), g.pick(&self.real.hashes))]),
             ["paper", "key"] => pair("paper", "key", g.pick(&self.real.study_sweeps)),
@@ -887,14 +892,65 @@ async fn real_values(store: &Store, sweep: String) -> Real {
         .flatten()
         .map(|f| (text(&f["paper"]), text(&f["figure"])))
         .collect();
+    let job = job_with_checkpoint(store, &sweep).await;
     Real {
         sweep,
         hashes,
+        job,
         queued: Vec::new(),
         study_sweeps,
         study_figures,
         sweep_figures,
     }
+}
+
+/// Keeps the first checkpoint a run saves, and stops the run there.
+#[derive(Default)]
+struct FirstSave(Option<repose_physics::Checkpoint>);
+
+impl repose_physics::Observer for FirstSave {
+    fn progress(&mut self, _: &repose_physics::Progress) -> bool {
+        self.0.is_none()
+    }
+    fn checkpoint_due(&mut self) -> bool {
+        self.0.is_none()
+    }
+    fn save(&mut self, checkpoint: repose_physics::Checkpoint) {
+        self.0 = Some(checkpoint);
+    }
+}
+
+/// A job of the finished `sweep` given a checkpoint, as a running long
+/// sample has one: a saved run of three 2D grains (its scene is 2D too).
+async fn job_with_checkpoint(store: &Store, sweep: &str) -> String {
+    let scene = repose_physics::Scene::from_toml(
+        "protocol = \"free_run\"\nduration = 0.1\n\
+         [[particles]]\nposition = [0.0, 0.1]\nradius = 0.1\n\
+         [[particles]]\nposition = [0.3, 0.1]\nradius = 0.1\n\
+         [[particles]]\nposition = [0.6, 0.1]\nradius = 0.1\n",
+        &[],
+    )
+    .unwrap();
+    let mut first = FirstSave::default();
+    repose_physics::run(&scene, &mut first).unwrap();
+    let saved = first.0.expect("the run saves a checkpoint");
+    let job: String = sqlx::query_scalar("SELECT id FROM jobs WHERE sweep_id = ? LIMIT 1")
+        .bind(sweep)
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    sqlx::query(
+        "INSERT INTO checkpoints (job_id, owner, sim_time, iteration, state, saved_at) \
+         VALUES (?, 'contract', ?, ?, ?, 0)",
+    )
+    .bind(&job)
+    .bind(saved.time)
+    .bind(saved.iteration as i64)
+    .bind(saved.state)
+    .execute(store.pool())
+    .await
+    .unwrap();
+    job
 }
 
 #[tokio::test]

@@ -74,6 +74,8 @@ enum Command {
     Status(service::StatusArgs),
     /// Export a sweep's samples or points as CSV.
     Export(service::ExportArgs),
+    /// Write where a running sample's grains are, from its latest checkpoint.
+    Grains(service::GrainsArgs),
     /// Run a sweep's failed jobs again (finished samples are kept).
     Retry(admin::RetryArgs),
     /// Copy a live SQLite store to a new file, consistently.
@@ -127,6 +129,7 @@ fn main() -> ExitCode {
         Command::Submit(args) => service::submit(args),
         Command::Status(args) => service::status(args),
         Command::Export(args) => service::export(args),
+        Command::Grains(args) => service::grains(args),
         Command::Retry(args) => admin::retry(args),
         Command::Backup(args) => admin::backup(args),
         Command::MeasureHeap(args) => measure_heap::run(args),

@@ -555,26 +555,57 @@ fn sweeps_table(list: &Value) -> String {
 }
 
 pub fn export(args: ExportArgs) -> anyhow::Result<ExitCode> {
-    let server = args.server.trim_end_matches('/').to_string();
+    let server = args.server.trim_end_matches('/');
+    let url = format!(
+        "{server}/api/sweeps/{}/{}?format=csv",
+        args.sweep, args.what
+    );
+    fetch_to(
+        &url,
+        "the server refused the export",
+        args.output.as_deref(),
+    )
+}
+
+#[derive(clap::Args)]
+pub struct GrainsArgs {
+    /// The job (its id, as `repose status SWEEP` lists the running ones).
+    job: String,
+    /// Write to this file instead of standard output.
+    #[arg(long, short)]
+    output: Option<PathBuf>,
+    #[arg(long, default_value = DEFAULT_SERVER, env = "REPOSE_SERVER")]
+    server: String,
+}
+
+/// Writes where a running sample's grains are, from its latest checkpoint.
+pub fn grains(args: GrainsArgs) -> anyhow::Result<ExitCode> {
+    let server = args.server.trim_end_matches('/');
+    let url = format!("{server}/api/jobs/{}/grains", args.job);
+    fetch_to(
+        &url,
+        "the server has no grains for that job",
+        args.output.as_deref(),
+    )
+}
+
+/// Fetches a text answer and writes it to `output` or standard output; a
+/// refusal becomes the server's own message (or `refused`).
+fn fetch_to(
+    url: &str,
+    refused: &str,
+    output: Option<&std::path::Path>,
+) -> anyhow::Result<ExitCode> {
     runtime()?.block_on(async {
-        let url = format!(
-            "{server}/api/sweeps/{}/{}?format=csv",
-            args.sweep, args.what
-        );
-        let resp = reqwest::get(&url)
+        let resp = reqwest::get(url)
             .await
             .with_context(|| format!("cannot reach {url}"))?;
         if !resp.status().is_success() {
             let body: Value = resp.json().await.unwrap_or(Value::Null);
-            bail!(
-                "{}",
-                body["error"]
-                    .as_str()
-                    .unwrap_or("the server refused the export")
-            );
+            bail!("{}", body["error"].as_str().unwrap_or(refused));
         }
         let text = resp.text().await?;
-        match &args.output {
+        match output {
             Some(path) => std::fs::write(path, text)
                 .with_context(|| format!("cannot write {}", path.display()))?,
             None => crate::emit(&text)?,

@@ -81,6 +81,25 @@ impl Store {
         .await?;
         Ok(row.map(stored))
     }
+
+    /// A job's resolved scene (JSON) and the furthest checkpoint of its
+    /// sample, whichever job saved it: how far the sample has come.
+    /// `None` for an unknown job.
+    pub async fn job_progress(
+        &self,
+        job_id: &str,
+    ) -> Result<Option<(String, Option<StoredCheckpoint>)>> {
+        let row = sqlx::query(&self.sql("SELECT scene, sample_hash FROM jobs WHERE id = $1"))
+            .bind(job_id)
+            .fetch_optional(&self.pool)
+            .await?;
+        let Some(row) = row else {
+            return Ok(None);
+        };
+        let hash: String = row.get("sample_hash");
+        let checkpoint = self.furthest_checkpoint(&hash).await?;
+        Ok(Some((row.get("scene"), checkpoint)))
+    }
 }
 
 fn stored(r: sqlx::any::AnyRow) -> StoredCheckpoint {
