@@ -220,13 +220,17 @@ fn heaps_down_to_half_dc(heaps: &SweepData, reading: Reading) -> Comparison {
         format!("heaps at all {tested} such points")
     } else {
         format!(
-            "no heap (the crest reached the top) at {}, of {tested} such points; {}",
+            "no heap (the crest reached the top) at {}, of {tested} such points; {}{TOWER_CAUSE}",
             none.join(", "),
             where_heaps_end(heaps, reading.metric)
         )
     };
     Comparison::statement(quantity, rule, None, None, none.is_empty(), why)
 }
+
+/// What moves the piles that reach the top, measured on the glass-stiff
+/// study's 60 µm heap on Mars (`sweeps/glass/tower-inlet-*.toml`).
+const TOWER_CAUSE: &str = ". Measured at 60 µm on Mars (glass-stiff, reduced heap, seeds 0 and 1, each read from the run's checkpoint once all 1500 grains had been poured and the pile had settled for at least 26 √(d/g), `repose grains` then `repose measure-heap`; data/glass/tower.db): its grains stick where they land, so the pile grows under the inlet as wide as the stream of grains, and the stream decides whether 1500 grains reach the top. Through our inlet (every grain wholly inside the 4.4 d square) they reach it after 1427 and 1450 grains, a column no wider than the inlet; filled as LIGGGHTS's insert/pack fills its region by default (grain centres anywhere in the square) the pile stands 20.1 d and 20.5 d high at 1500 poured, a steep irregular heap (62.8° and 63.8° by the silhouette, outline rms 4.5 d and 3.3 d), and through an 8.8 d inlet 11.5 d and 12.4 d (55.0° and 56.2°, as our last heap, 100 µm on the Moon); the 100 µm heap on Pluto was not poured again. The same fill leaves the 1 mm heaps on Earth within their error (by the silhouette, dry −0.09° ± 0.26°, cohesive −0.40° ± 0.34°; data/glass/inlet-centres-*.csv)";
 
 /// Whether a point formed a heap in any of its samples.
 fn formed(p: &repose_store::Point) -> bool {
