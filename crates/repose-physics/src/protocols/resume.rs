@@ -48,6 +48,9 @@ const FORMAT_3: u32 = 3;
 /// The format before that: the engine's counters field by field as well.
 const FORMAT_2: u32 = 2;
 
+/// The formats this build reads.
+const READABLE: [u32; 3] = [FORMAT, FORMAT_3, FORMAT_2];
+
 /// A protocol's own state in a checkpoint, and how formats 2 and 3 held it.
 pub trait SavedProtocol: Serialize + serde::de::DeserializeOwned {
     /// The state as formats 2 and 3 laid it out.
@@ -163,7 +166,7 @@ where
         format,
         ..header.clone()
     }) != found
-        || ![FORMAT, FORMAT_3, FORMAT_2].contains(&format)
+        || !READABLE.contains(&format)
     {
         return Err(format!(
             "the checkpoint was written by another build or scene ({} {} {} seed {}, format {})",
@@ -217,7 +220,7 @@ where
 {
     let (header, _): (Header, _) =
         postcard::take_from_bytes(bytes).map_err(|e| format!("unreadable checkpoint: {e}"))?;
-    if ![FORMAT, FORMAT_3, FORMAT_2].contains(&header.format) {
+    if !READABLE.contains(&header.format) {
         return Err(format!(
             "the checkpoint's format {} is not one this build reads",
             header.format
