@@ -530,6 +530,34 @@ fn grains_at_rest_change_nothing_between_one_thread_and_two() {
 /// restitution raised past 1 by softening too far, and a bound on the
 /// attraction's kick that is not a positive number or bounds the step below
 /// t_c/10⁴, and a plate or a domain too large to grid.
+/// The inlet's fill is part of a scene's identity only when it is not the
+/// default, so that every heap stored before the option keeps its hash;
+/// an unknown fill is refused by its field; and a pour whose grains
+/// straddle the prism's sides pours all it is asked for into a heap.
+#[test]
+fn the_inlet_fill_is_stored_only_when_asked_for() {
+    let stored = |extra: &[&str]| {
+        let o: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+        let scene = Scene::from_toml(SMALL_HEAP, &o).unwrap().resolved();
+        serde_json::to_value(&scene).unwrap()["heap"].clone()
+    };
+    assert!(stored(&[]).get("inlet_fill").is_none());
+    assert!(stored(&["heap.inlet_fill=\"inside\""])
+        .get("inlet_fill")
+        .is_none());
+    assert_eq!(
+        stored(&["heap.inlet_fill=\"centres\""])["inlet_fill"],
+        "centres"
+    );
+    let o = ["heap.inlet_fill=\"edges\"".to_string()];
+    let err = Scene::from_toml(SMALL_HEAP, &o).unwrap_err();
+    let fields: Vec<&str> = err.errors.iter().map(|e| e.field.as_str()).collect();
+    assert_eq!(fields, ["heap.inlet_fill"], "{err:?}");
+    let r = heap(&["heap.inlet_fill=\"centres\"", "heap.max_grains=600"]);
+    assert_eq!(r.grains.inserted, 600);
+    assert!(r.outcome.is_completed(), "{:?}", r.outcome);
+}
+
 #[test]
 fn options_that_cannot_hold_are_refused_by_field() {
     let refused = |extra: &[&str]| {

@@ -47,6 +47,11 @@ pub struct HeapSpec {
     pub inlet_floor: f64,
     /// Solid fraction the prism is filled to at each insertion.
     pub fill_fraction: f64,
+    /// Where in the prism a new grain may lie (left out of a scene's
+    /// stored form when `inside`, so that scenes written before it keep
+    /// their identity).
+    #[serde(skip_serializing_if = "InletFill::is_inside")]
+    pub inlet_fill: InletFill,
     /// Time between insertions, √(d/g).
     pub interval: f64,
     /// Grains poured at most.
@@ -78,6 +83,7 @@ impl Default for HeapSpec {
             inlet_width: 4.4,
             inlet_floor: 20.0,
             fill_fraction: 0.2,
+            inlet_fill: InletFill::Inside,
             interval: 3.5,
             max_grains: 25_000,
             rest_energy: 1e-6,
@@ -87,6 +93,27 @@ impl Default for HeapSpec {
             steady_every: 0,
             steady_tolerance: 0.5,
         }
+    }
+}
+
+/// Where the insertion prism places its grains across the stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InletFill {
+    /// Every grain wholly inside the prism: centres at least a radius in
+    /// from its sides, so the stream is a diameter narrower than the inlet.
+    #[default]
+    Inside,
+    /// Centres anywhere in the prism's square, grains reaching up to a
+    /// radius past its sides: the stream is as wide as the inlet, as
+    /// LIGGGHTS's `fix insert/pack` fills its region by default
+    /// (`all_in no`). Along the height grains stay wholly inside.
+    Centres,
+}
+
+impl InletFill {
+    fn is_inside(&self) -> bool {
+        *self == InletFill::Inside
     }
 }
 
@@ -513,9 +540,11 @@ impl Pour<'_> {
     ) -> usize {
         let d = self.scales.d;
         let half = 0.5 * self.spec.inlet_width * d;
+        let across = self.spec.inlet_fill == InletFill::Centres;
         let region = Region {
             lo: Vector::<3>::new(-half, -half, floor),
             hi: Vector::<3>::new(half, half, self.spec.height * d),
+            straddle: [across, across, false],
         };
         let largest = self.grains.diameter_range().1;
         let mut placer = Placer::new(largest, Vector::<3>::zeros(), [0.0; 3]);

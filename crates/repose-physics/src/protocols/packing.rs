@@ -228,6 +228,7 @@ fn column<L: ContactLaw<3>, I: Integrator<3>>(
     let region = Region {
         lo: Vector::<3>::zeros(),
         hi: Vector::<3>::new(w, w, spec.height * d),
+        straddle: [false; 3],
     };
     let mut placer = Placer::new(grains.diameter_range().1, Vector::<3>::zeros(), [w, w, 0.0]);
     let mut stream = Stream::new(scene.seed);

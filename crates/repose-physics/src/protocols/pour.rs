@@ -348,6 +348,10 @@ impl Placer {
 pub struct Region {
     pub lo: Vector<3>,
     pub hi: Vector<3>,
+    /// Along the axes marked, a grain filled in may reach past the faces
+    /// (its centre anywhere between them); along the others it lies wholly
+    /// inside, unless the axis is periodic.
+    pub straddle: [bool; 3],
 }
 
 impl Region {
@@ -386,7 +390,7 @@ pub fn draw_diameter(grains: &Grains, stream: &mut Stream) -> f64 {
 }
 
 /// Adds grains at random points of `region` (wholly inside it along the
-/// open axes) until their volume, with that of the grains already centred
+/// open axes it does not let them straddle) until their volume, with that of the grains already centred
 /// there, reaches `fraction` of the region, or `budget` grains were added.
 /// Returns the new grains' centres and diameters. A grain that finds no
 /// room after many tries ends the fill.
@@ -407,7 +411,7 @@ pub fn fill(
         let d = draw_diameter(grains, stream);
         // Along a periodic axis a grain may straddle the face.
         let margin: [f64; 3] = std::array::from_fn(|a| {
-            if placer.periods[a] > 0.0 {
+            if placer.periods[a] > 0.0 || region.straddle[a] {
                 0.0
             } else {
                 0.5 * d
@@ -562,7 +566,7 @@ pub fn preset(preset: Preset) -> Vec<(&'static str, Value)> {
 
 #[cfg(test)]
 mod tests {
-    use super::Rest;
+    use super::{fill, Grains, Placer, Region, Rest, Stream};
     use crate::scene::Scene;
     use repose_engine::dim::Vector;
     use repose_engine::particles::Particles;
@@ -590,6 +594,51 @@ mod tests {
             exempt,
         }
         .holds(&p, mean)
+    }
+
+    /// Unit grains filled into a 6 × 6 × 10 box to a fifth of its volume,
+    /// letting them straddle its sides across or not: the grains placed
+    /// and the largest distance of a centre from the axis and from the
+    /// box's mid-height.
+    fn filled(straddle: bool) -> (usize, f64, f64) {
+        let region = Region {
+            lo: Vector::<3>::new(-3.0, -3.0, 0.0),
+            hi: Vector::<3>::new(3.0, 3.0, 10.0),
+            straddle: [straddle, straddle, false],
+        };
+        let grains = Grains {
+            diameter: 1.0,
+            ..Grains::default()
+        };
+        let mut placer = Placer::new(1.0, Vector::<3>::zeros(), [0.0; 3]);
+        let mut stream = Stream::new(7);
+        let new = fill(&region, 0.2, &mut placer, 0.0, &grains, &mut stream, 1000);
+        let across = new.iter().map(|(x, _)| x[0].abs().max(x[1].abs()));
+        let along = new.iter().map(|(x, _)| (x[2] - 5.0).abs());
+        (
+            new.len(),
+            across.fold(0.0, f64::max),
+            along.fold(0.0, f64::max),
+        )
+    }
+
+    #[test]
+    fn an_inlet_fills_grains_wholly_inside_or_with_centres_anywhere_across() {
+        // A fifth of 360 is 72 unit volumes, π/6 each: 138 grains either way.
+        let wanted = (0.2 * 360.0 / (std::f64::consts::PI / 6.0)).ceil() as usize;
+        let (n_inside, across_inside, along_inside) = filled(false);
+        let (n_centres, across_centres, along_centres) = filled(true);
+        assert_eq!((n_inside, n_centres), (wanted, wanted));
+        // Wholly inside: every centre a radius in from the sides.
+        assert!(across_inside <= 2.5, "{across_inside}");
+        // Centres anywhere: some within the outer half diameter (138 draws
+        // over the 6 × 6 square leave none there with odds of 10⁻²²).
+        assert!(
+            across_centres > 2.5 && across_centres <= 3.0,
+            "{across_centres}"
+        );
+        // Along the height both stay wholly inside.
+        assert!(along_inside <= 4.5 && along_centres <= 4.5);
     }
 
     #[test]
