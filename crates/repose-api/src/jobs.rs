@@ -34,10 +34,8 @@ pub async fn grains(State(s): State<AppState>, Path(id): Path<String>) -> ApiRes
             format!("the checkpoint cannot be read: {why}"),
         )
     };
-    let dimension = serde_json::from_str(&scene)
-        .map_err(|e| e.to_string())
-        .and_then(|v| Scene::from_stored(v).map_err(|e| e.to_string()))
-        .map_err(unreadable)?
+    let dimension = Scene::from_stored_text(&scene)
+        .map_err(|e| unreadable(e.to_string()))?
         .dimension;
     let grains = saved_grains(&checkpoint.state, dimension).map_err(unreadable)?;
     let mut text = format!(

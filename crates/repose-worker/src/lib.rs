@@ -288,10 +288,7 @@ async fn work(
     job: &Claim,
     shutdown: &mut watch::Receiver<bool>,
 ) -> Ending {
-    let scene = match serde_json::from_str::<serde_json::Value>(&job.scene)
-        .map_err(|e| e.to_string())
-        .and_then(|v| Scene::from_stored(v).map_err(|e| e.to_string()))
-    {
+    let scene = match Scene::from_stored_text(&job.scene) {
         Ok(s) => s,
         Err(reason) => {
             return give_up(store, config, job, format!("unreadable scene: {reason}")).await

@@ -46,6 +46,13 @@ impl Scene {
         Scene::from_json(upgrade_stored(value))
     }
 
+    /// Reads a scene from the JSON text a store keeps with each job.
+    pub fn from_stored_text(text: &str) -> Result<Scene, SceneError> {
+        let value = serde_json::from_str(text)
+            .map_err(|e| SceneError::single("(document)", format!("not JSON: {e}")))?;
+        Scene::from_stored(value)
+    }
+
     /// Builds a scene from a document: protocol, model and dimension first,
     /// then the preset's settings and the model's defaults where the
     /// document is silent, then the core and each section; validates.
@@ -491,10 +498,15 @@ mod tests {
             "contact": {"mu": 0.3}
         });
         assert!(Scene::from_json(stored.clone()).is_err());
-        let s = Scene::from_stored(stored).unwrap();
+        let s = Scene::from_stored(stored.clone()).unwrap();
         assert_eq!(s.seed, 3);
         assert_eq!(s.section::<BoxSpec>().unwrap().grains, Some(100));
         assert!(!s.sections.contains_key("tilt"));
+        // As a store keeps it: the same scene from its text; text that is
+        // not JSON is refused as a document.
+        assert_eq!(Scene::from_stored_text(&stored.to_string()).unwrap(), s);
+        let f = fields(Scene::from_stored_text("{\"protocol\": ").unwrap_err());
+        assert_eq!(f, ["(document)"]);
     }
 
     #[test]
