@@ -390,8 +390,9 @@ pub fn draw_diameter(grains: &Grains, stream: &mut Stream) -> f64 {
 }
 
 /// Adds grains at random points of `region` (wholly inside it along the
-/// open axes it does not let them straddle) until their volume, with that of the grains already centred
-/// there, reaches `fraction` of the region, or `budget` grains were added.
+/// open axes it does not let them straddle) until their volume, with that
+/// of the grains already centred there, reaches `fraction` of the region,
+/// or `budget` grains were added.
 /// Returns the new grains' centres and diameters. A grain that finds no
 /// room after many tries ends the fill.
 pub fn fill(
@@ -409,7 +410,8 @@ pub fn fill(
     let mut out = Vec::new();
     'grains: while volume < target && out.len() < budget {
         let d = draw_diameter(grains, stream);
-        // Along a periodic axis a grain may straddle the face.
+        // Along a periodic axis, or one the region lets grains straddle, a
+        // grain may reach past the face.
         let margin: [f64; 3] = std::array::from_fn(|a| {
             if placer.periods[a] > 0.0 || region.straddle[a] {
                 0.0
