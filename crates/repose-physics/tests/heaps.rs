@@ -525,11 +525,6 @@ fn grains_at_rest_change_nothing_between_one_thread_and_two() {
     assert_eq!(one.neighbors.history, two.neighbors.history);
 }
 
-/// The options that cannot hold are refused, naming the field: grains at
-/// rest on the Gear integrator or put to rest in mid-flight, a
-/// restitution raised past 1 by softening too far, and a bound on the
-/// attraction's kick that is not a positive number or bounds the step below
-/// t_c/10⁴, and a plate or a domain too large to grid.
 /// The inlet's fill is part of a scene's identity only when it is not the
 /// default, so that every heap stored before the option keeps its hash;
 /// an unknown fill is refused by its field; and a pour whose grains
@@ -558,6 +553,11 @@ fn the_inlet_fill_is_stored_only_when_asked_for() {
     assert!(r.outcome.is_completed(), "{:?}", r.outcome);
 }
 
+/// The options that cannot hold are refused, naming the field: grains at
+/// rest on the Gear integrator or put to rest in mid-flight, a
+/// restitution raised past 1 by softening too far, and a bound on the
+/// attraction's kick that is not a positive number or bounds the step below
+/// t_c/10⁴, and a plate or a domain too large to grid.
 #[test]
 fn options_that_cannot_hold_are_refused_by_field() {
     let refused = |extra: &[&str]| {
