@@ -712,13 +712,12 @@ fn nothing_resists_a_twist_about_the_contact_normal() {
 
 /// How far the speed at which two grains part after an undamped cohesive
 /// head-on collision at `v`, stepped by Verlet at `dt`, misses `v` (root
-/// mean square over eight instants of first contact within a step). They
-/// start and end beyond the attraction's reach and nothing dissipates, so
-/// energy conservation asks for no difference at all.
-fn cohesive_rebound_error(parts: (Parts, Parts), v: f64, dt: f64) -> f64 {
+/// mean square over `phases` instants of first contact within a step).
+/// They start and end beyond the attraction's reach and nothing
+/// dissipates, so energy conservation asks for no difference at all.
+fn cohesive_rebound_error(parts: (Parts, Parts), v: f64, dt: f64, phases: usize) -> f64 {
     let d_max = 1e-6;
     let t = collision_time(&parts.0, v);
-    let phases = 8;
     let squares: f64 = (0..phases)
         .map(|k| {
             let gap = 1.05 * d_max + (k as f64 + 0.5) / phases as f64 * v * dt;
@@ -752,11 +751,11 @@ fn the_attraction_kick_per_step_is_the_energy_error_of_a_cohesive_collision() {
     let p = elekes_parteli::parts(&bounded).unwrap();
     let v = 0.5;
     let (e0, e1) = (
-        cohesive_rebound_error(p, v, dt0),
-        cohesive_rebound_error(p, v, dt1),
+        cohesive_rebound_error(p, v, dt0, 8),
+        cohesive_rebound_error(p, v, dt1, 8),
     );
     let dry = parts(&[&material[..], &["material.surface_energy=0"][..]].concat());
-    let e_dry = cohesive_rebound_error(dry, v, dt0);
+    let e_dry = cohesive_rebound_error(dry, v, dt0, 8);
     println!(
         "steps {dt0:.3e} / {dt1:.3e} s (kicks {:.3} / {:.3} √(gd)); parting speed off by {:.3e} / {:.3e} √(gd), {:.3e} without cohesion",
         kick(dt0),
@@ -770,4 +769,61 @@ fn the_attraction_kick_per_step_is_the_energy_error_of_a_cohesive_collision() {
     assert!(e1 < 0.5 * scale && e0 < kick(dt0) * scale);
     let order = (e0 / e1).ln() / (dt0 / dt1).ln();
     assert!((0.6..1.4).contains(&order), "order {order}");
+}
+
+#[test]
+fn a_swept_attraction_keeps_a_cohesive_collision_s_energy_at_the_coarse_step() {
+    // The collision above at the step that kicks by more than √(g d), the
+    // attraction read at the gap (`point`) and averaged over the gaps each
+    // step sweeps (`swept`), in both forms of the attraction in contact.
+    // Constant in contact, the attraction switches on at the surface: met
+    // at 0.5 m/s, eight instants of first contact show it. Fading, it is a
+    // spike a few D_min wide that a step of 78 nm (met at 3 mm/s, above
+    // the speed at which the pair would stick) lands in at one instant in
+    // a few hundred: 4000 instants find those.
+    let cases = [("constant", 0.5, 8), ("fading", 3e-3, 4000)];
+    let mut results = Vec::new();
+    for (form, v, phases) in cases {
+        let form = format!("material.contact_attraction=\"{form}\"");
+        let material = [
+            "material.youngs_modulus=1e6",
+            "material.restitution=1",
+            "gravity=[0.0, 0.0, -9.81e-4]",
+            &form,
+        ];
+        let point = scene(&material);
+        let swept_step = "numerics.attraction_step=\"swept\"";
+        let swept = scene(&[&material[..], &[swept_step][..]].concat());
+        let dt = point.time_step();
+        assert_eq!(swept.time_step(), dt);
+        let (p, s) = (
+            elekes_parteli::parts(&point).unwrap(),
+            elekes_parteli::parts(&swept).unwrap(),
+        );
+        assert_eq!((p.0.cohesion.sweep, s.0.cohesion.sweep), (0.0, dt));
+        assert_eq!(s.1.cohesion.sweep, 0.0, "the plate does not attract");
+        let scale = (9.81e-4 * D).sqrt();
+        let (e_point, e_swept) = (
+            cohesive_rebound_error(p, v, dt, phases),
+            cohesive_rebound_error(s, v, dt, phases),
+        );
+        let dry = parts(&[&material[..], &["material.surface_energy=0"][..]].concat());
+        let e_dry = cohesive_rebound_error(dry, v, dt, phases);
+        println!(
+            "{form}, met at {v} m/s, step {dt:.3e} s: parting speed off by {:.3e} √(gd) \
+             at the gap, {:.3e} swept, {:.3e} without cohesion",
+            e_point / scale,
+            e_swept / scale,
+            e_dry / scale
+        );
+        results.push((form, e_point, e_swept, e_dry));
+    }
+    // Measured: constant 2.40 at the gap, 1.00 swept, 0.52 dry (the rest
+    // is the Hertz onset's own error, which the attraction deepens);
+    // fading 0.25, 7.6·10⁻⁴ swept, 2.5·10⁻⁴ dry.
+    let (constant, fading) = (&results[0], &results[1]);
+    assert!(constant.2 < 0.5 * constant.1, "{constant:?}");
+    assert!(constant.2 < 2.5 * constant.3, "{constant:?}");
+    assert!(fading.2 < 0.01 * fading.1, "{fading:?}");
+    assert!(fading.1 > 100.0 * fading.3, "{fading:?}");
 }

@@ -179,6 +179,21 @@ where
     fn of(surfaces: &Cohesive) -> Self;
     /// Largest gap across which the attraction acts.
     fn range(&self) -> f64;
+
+    /// Whether the law averages the attraction over the gaps a pair sweeps
+    /// in a step, so that a pair opening at `rate` feels it out to
+    /// [`CohesionLaw::reach`] rather than [`CohesionLaw::range`].
+    #[inline(always)]
+    fn sweeps(&self) -> bool {
+        false
+    }
+
+    /// The largest gap at which a pair whose gap opens at `rate` feels the
+    /// attraction in a step.
+    #[inline(always)]
+    fn reach(&self, _rate: f64) -> f64 {
+        self.range()
+    }
     /// Size of the attraction (pulling `i` towards `j`) for this pair.
     fn attraction(&self, touch: &Touch<D>) -> f64;
 
@@ -278,6 +293,15 @@ where
     /// Largest gap across which the law acts (0 for contact-only laws).
     fn range(&self) -> f64;
 
+    /// Whether a pair beyond [`ContactLaw::range`] may still feel the law
+    /// in a step, out to [`ContactLaw::gap_reach`] (an attraction averaged
+    /// over the gaps the step sweeps).
+    fn sweeps(&self) -> bool;
+
+    /// The largest gap at which a pair whose gap opens at `rate` feels the
+    /// law in a step.
+    fn gap_reach(&self, rate: f64) -> f64;
+
     /// Work an attraction does on a pair of effective radius `r_eff`
     /// pulled from out of range to an overlap `depth` (0 without one).
     fn bond_work(&self, r_eff: f64, depth: f64) -> f64;
@@ -372,6 +396,20 @@ where
     fn range(&self) -> f64 {
         if C::ACTIVE {
             self.cohesion.range()
+        } else {
+            0.0
+        }
+    }
+
+    #[inline(always)]
+    fn sweeps(&self) -> bool {
+        C::ACTIVE && self.cohesion.sweeps()
+    }
+
+    #[inline(always)]
+    fn gap_reach(&self, rate: f64) -> f64 {
+        if C::ACTIVE {
+            self.cohesion.reach(rate)
         } else {
             0.0
         }

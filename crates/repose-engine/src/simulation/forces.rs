@@ -322,7 +322,14 @@ where
         *history = Default::default();
         if L::ACTS_ACROSS_GAPS {
             let limit = reach + law.range();
-            if dist2 < limit * limit {
+            let mut near = dist2 < limit * limit;
+            if !near && law.sweeps() {
+                // A pair beyond the range may sweep into it within the step,
+                // if it closes fast enough: its speed bounds its closing rate.
+                let wide = reach + law.gap_reach((g.vel[i] - g.vel[j]).norm());
+                near = dist2 < wide * wide;
+            }
+            if near {
                 let touch = pair_touch(g, i, j, r, dist2.sqrt(), L::ROTATES);
                 return Some((law.gap_force(&touch), 0.0));
             }

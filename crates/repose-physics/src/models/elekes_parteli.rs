@@ -7,7 +7,7 @@
 
 use super::{assemble, select, Build, EngineJob, Laws, Model};
 use crate::doc::Doc;
-use crate::scene::{Checks, Scene, SceneError, Section, SectionDecl};
+use crate::scene::{AttractionStep, Checks, Scene, SceneError, Section, SectionDecl};
 use repose_engine::contact::{
     restitution, Cap, CohesionLaw, Cohesive, Epsd2, Limits, MindlinSpring, NoCohesion, NoRolling,
     Pairwise, RollingLaw, VanDerWaals, ViscoelasticHertz,
@@ -608,6 +608,7 @@ impl Parts {
                 d_max: m.d_max,
                 limits: m.limit_load.limits(),
                 fades_in_contact: m.contact_attraction == ContactAttraction::Fading,
+                sweep: 0.0,
             },
         }
     }
@@ -663,7 +664,10 @@ fn parts_of(scene: &Scene, grains: &Grains, m: &Material) -> (Parts, Parts) {
         let step = verlet.then(|| dt / kind.unit(m, m.impact_speed));
         kind.damping(m, m.damping_number(step))
     };
-    let pair = Parts::new(m, damped(Kind::pair(grains, d)), true);
+    let mut pair = Parts::new(m, damped(Kind::pair(grains, d)), true);
+    if scene.numerics.attraction_step == AttractionStep::Swept {
+        pair.cohesion.sweep = dt;
+    }
     let plate = Parts::new(m, damped(Kind::plate(grains, d)), false);
     (pair, plate)
 }
