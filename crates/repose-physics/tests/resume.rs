@@ -45,10 +45,16 @@ impl Observer for Recorder {
 
 /// A small cohesive heap with rolling resistance: every kind of contact
 /// history (tangential spring, rolling torque, cohesive capture) is live.
+/// Its attraction is read at the pair's gap with the step bounded by its
+/// kick, as `quick` read it before it swept it: so its grains stay on this
+/// small plate, and the kept checkpoint below stays its own.
 const HEAP: &str = r#"
 protocol = "heap"
 preset = "quick"
 seed = 5
+[numerics]
+attraction_kick = 0.5
+attraction_step = "point"
 [material]
 surface_energy = 0.01
 [heap]

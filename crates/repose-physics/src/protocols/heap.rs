@@ -263,7 +263,7 @@ pub const STANDARD_MODULUS_FRACTION: f64 = 0.1;
 /// 1 mm on the Moon and at g̃ = 10, for about a third of the
 /// particle-steps; a hundredth stands 1.7° below glass at 1 mm
 /// (`docs/model-3d.md`, "Softening, and its limits"). `paper` keeps the
-/// true modulus. Like `quick`, `standard` bounds the attraction's kick per
+/// true modulus. `standard` bounds the attraction's kick per
 /// step to half of `√(g d)`: the step, and with it the kick, grows as
 /// `Y^{−2/5}`, so the study's finest heap at its lowest gravity (60 µm,
 /// g̃ = 0.063: 0.20 at glass) reaches the bound at a tenth; every heap
