@@ -10,7 +10,9 @@
 //! angle within 1° (`protocols::heap::preset`), and packs columns at
 //! glass's own, since softened columns pack measurably looser; a `standard`
 //! reproduction costs some 19 core-hours, a `paper` one (glass throughout)
-//! some 40. The columns are
+//! some 40, and a `quick` one just under one (3446 core-seconds, 29
+//! minutes on two cores; its heaps stand 4° below glass's on average,
+//! `docs/reproduction-ep21-quick.md`). The columns are
 //! narrower than the paper's (8 d against 17 d, periodic) but as tall
 //! (100 d), since a cohesive bed released from lower packs looser.
 //!
